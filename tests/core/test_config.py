@@ -1,0 +1,82 @@
+from pathlib import Path
+
+import pytest
+import torch
+
+import torchsym
+from torchsym.core.config import build_pipeline, default_config, load_config
+from torchsym.errors import ConfigError, InputFileError
+
+CONFIGS = sorted((Path(__file__).resolve().parents[2] / "configs").glob("*.yaml"))
+
+
+class TestConfigs:
+    def test_there_are_configs(self):
+        assert any(p.name == "pointcloud_plane.yaml" for p in CONFIGS)
+
+    @pytest.mark.parametrize("path", CONFIGS, ids=[p.name for p in CONFIGS])
+    def test_every_config_builds(self, path):
+        pipe = build_pipeline(path)
+        assert len(pipe.steps) >= 1
+        assert pipe.input_kind in ("pointcloud", "points", "image", "mesh")
+
+
+class TestLoadConfig:
+    def test_unknown_top_key(self):
+        with pytest.raises(ConfigError, match=r"unknown key 'step' \(did you mean 'steps'\?\)"):
+            load_config({"input": "pointcloud", "step": []})
+
+    def test_unknown_solver(self):
+        with pytest.raises(ConfigError, match=r"unknown solver 'reflection_plan' \(did you mean 'reflection_plane'\?\)"):
+            load_config({"input": "pointcloud", "steps": [{"name": "reflection_plan"}]})
+
+    def test_unknown_param_lists_valid(self):
+        with pytest.raises(ConfigError) as err:
+            load_config({"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_start": 2}}]})
+        msg = str(err.value)
+        assert "unknown parameter 'n_start'" in msg and "did you mean 'n_starts'" in msg and "valid parameters:" in msg
+
+    def test_bad_kind(self):
+        with pytest.raises(ConfigError, match="'input' must be one of"):
+            load_config({"input": "video", "steps": ["reflection_plane"]})
+
+    def test_kind_mismatch(self):
+        with pytest.raises(ConfigError, match="takes 'pointcloud' input, but the config's input is 'image'"):
+            load_config({"input": "image", "steps": ["reflection_plane"]})
+
+    def test_bad_value_reported(self):
+        with pytest.raises(ConfigError, match="n_starts: expected an integer >= 1, got 0"):
+            build_pipeline({"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_starts": 0}}]})
+
+    def test_missing_file(self, tmp_path):
+        with pytest.raises(InputFileError, match="does not exist"):
+            load_config(tmp_path / "nope.yaml")
+
+    def test_bad_yaml(self, tmp_path):
+        p = tmp_path / "bad.yaml"
+        p.write_text("input: [unclosed")
+        with pytest.raises(InputFileError, match="is not valid YAML"):
+            load_config(p)
+
+    def test_overrides_checked(self):
+        cfg = default_config("pointcloud")
+        with pytest.raises(ConfigError, match="unknown parameter 'bogus'"):
+            cfg.with_overrides({"bogus": 1})
+
+    def test_detect_with_overrides(self):
+        cloud = torchsym.pointcloud.planted_symmetric_cloud(800, generator=1)
+        res = torchsym.detect(cloud.points, n_starts=1)
+        assert res.score > 0.9
+
+
+class TestRegistry:
+    def test_default_solver(self):
+        assert torchsym.SOLVERS.default_for("pointcloud").name == "reflection_plane"
+
+    def test_get_unknown_lists_names(self):
+        with pytest.raises(ConfigError, match="known: .*reflection_plane"):
+            torchsym.SOLVERS.get("nope")
+
+    def test_solvers_importable_from_top_level(self):
+        for entry in torchsym.SOLVERS:
+            assert getattr(torchsym, entry.cls.__name__) is entry.cls

@@ -1,0 +1,141 @@
+import math
+
+import pytest
+import torch
+
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.geometry import (
+    angles_to_normal,
+    normal_to_angles,
+    plane_angle,
+    plane_from_pairs,
+    plane_from_reflection,
+    point_plane_distance,
+    reflect_points,
+    reflection_matrix,
+    reflection_matrix_from_angles,
+    reflection_transform,
+)
+
+
+def _rand(*shape, seed=0):
+    return torch.randn(*shape, generator=torch.Generator().manual_seed(seed), dtype=torch.float64)
+
+
+class TestReflectPoints:
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_involution(self, d):
+        x, n, b = _rand(5, d), _rand(d, seed=1), _rand((), seed=2)
+        assert torch.allclose(reflect_points(reflect_points(x, n, b), n, b), x, atol=1e-12)
+
+    def test_fixes_plane_and_flips_distance(self):
+        x, n, b = _rand(7, 3), _rand(3, seed=3), _rand((), seed=4)
+        y = reflect_points(x, n, b)
+        assert torch.allclose(point_plane_distance(y, n, b), -point_plane_distance(x, n, b), atol=1e-12)
+        assert torch.allclose(0.5 * (x + y) @ (n / n.norm()) + b / n.norm(), torch.zeros(7, dtype=torch.float64), atol=1e-12)
+
+    def test_batch_equals_loop(self):
+        x, n, b = _rand(4, 6, 3), _rand(4, 3, seed=1), _rand(4, seed=2)
+        batched = reflect_points(x, n, b)
+        for i in range(4):
+            assert torch.allclose(batched[i], reflect_points(x[i], n[i], b[i]))
+
+    def test_matrix_forms(self):
+        n, b = _rand(3), _rand((), seed=1)
+        s = reflection_matrix(n)
+        assert torch.allclose(s @ s.T, torch.eye(3, dtype=torch.float64), atol=1e-12)
+        assert torch.allclose(torch.det(s), torch.tensor(-1.0, dtype=torch.float64))
+        assert torch.allclose(s, s.T)
+        x = _rand(5, 3, seed=2)
+        h = reflection_transform(n, b)
+        xh = torch.cat([x, torch.ones(5, 1, dtype=torch.float64)], 1) @ h.T
+        assert torch.allclose(xh[:, :3], reflect_points(x, n, b))
+
+    def test_gradcheck(self):
+        x = _rand(4, 3).requires_grad_()
+        n = _rand(3, seed=1).requires_grad_()
+        b = _rand((), seed=2).requires_grad_()
+        assert torch.autograd.gradcheck(reflect_points, (x, n, b))
+
+    def test_exception(self):
+        with pytest.raises(InputShapeError, match=r"points: expected \(\.\.\., N, 3\) to match normal"):
+            reflect_points(torch.zeros(4, 2), torch.ones(3))
+        with pytest.raises(InputValueError, match="normal: expected a non-zero vector"):
+            reflect_points(torch.zeros(4, 3), torch.zeros(3))
+
+
+class TestPlaneFromPairs:
+    @pytest.mark.parametrize("d", [2, 3, 5])
+    def test_exact_pairs(self, d):
+        n = _rand(d)
+        n = n / n.norm()
+        b = _rand((), seed=1)
+        p = _rand(30, d, seed=2)
+        q = reflect_points(p, n, b)
+        for constraint, lam in (("normal", 0.25), ("plane", 1.0)):
+            n2, b2 = plane_from_pairs(p, q, constraint=constraint, lam=lam)
+            sign = torch.sign((n2 * n).sum())
+            assert torch.allclose(n2 * sign, n, atol=1e-9) and torch.allclose(b2 * sign, b, atol=1e-9)
+
+    def test_least_squares_energy(self):
+        # with lam = 1/4 the energy is exactly 1/4 sum |reflect(p) - q|^2: no plane does better
+        p, q = _rand(40, 3), _rand(40, 3, seed=1)
+        n, b = plane_from_pairs(p, q)
+        best = (reflect_points(p, n, b) - q).pow(2).sum()
+        for seed in range(20):
+            m = n + 0.05 * _rand(3, seed=10 + seed)
+            assert (reflect_points(p, m, b) - q).pow(2).sum() >= best - 1e-9
+
+    def test_translation_invariant(self):
+        p, q = _rand(20, 3), _rand(20, 3, seed=1)
+        t = torch.tensor([5.0, -3.0, 2.0], dtype=torch.float64)
+        n1, b1 = plane_from_pairs(p, q)
+        n2, b2 = plane_from_pairs(p + t, q + t)
+        assert torch.allclose(n1, n2, atol=1e-9) and torch.allclose(b2, b1 - (n1 * t).sum(), atol=1e-9)
+
+    def test_weights_drop_pairs(self):
+        n = torch.tensor([0.0, 1.0, 0.0], dtype=torch.float64)
+        p = _rand(10, 3)
+        q = reflect_points(p, n, torch.tensor(0.0, dtype=torch.float64))
+        q[:3] = _rand(3, 3, seed=9)  # three wrong pairs
+        w = torch.ones(10, dtype=torch.float64)
+        w[:3] = 0
+        n2, _ = plane_from_pairs(p, q, w)
+        assert float(plane_angle(n2, n)) < 1e-9
+
+    def test_gradcheck(self):
+        p = _rand(6, 3).requires_grad_()
+        q = (reflect_points(p.detach(), torch.tensor([1.0, 0.2, 0.1], dtype=torch.float64)) + 0.1 * _rand(6, 3, seed=5)).requires_grad_()
+        assert torch.autograd.gradcheck(lambda a, c: plane_from_pairs(a, c)[0], (p, q))
+
+    def test_exception(self):
+        with pytest.raises(InputShapeError, match=r"mirrors: expected the same \(\.\.\., N, D\) shape as points"):
+            plane_from_pairs(torch.zeros(4, 3), torch.zeros(5, 3))
+        with pytest.raises(InputValueError, match="constraint: expected 'normal' or 'plane'"):
+            plane_from_pairs(torch.zeros(4, 3), torch.zeros(4, 3), constraint="x")
+
+
+class TestAnglesAndConversions:
+    def test_plane_angle_unoriented(self):
+        a = torch.tensor([1.0, 0.0, 0.0])
+        assert float(plane_angle(a, -a)) == 0.0
+        assert math.isclose(float(plane_angle(a, torch.tensor([1.0, 1.0, 0.0]))), math.pi / 4, rel_tol=1e-6)
+        assert math.isclose(float(plane_angle(a, -a, oriented=True)), math.pi, rel_tol=1e-6)
+
+    def test_plane_angle_small_accurate(self):
+        a = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)
+        b = torch.tensor([1.0, 1e-9, 0.0], dtype=torch.float64)
+        assert math.isclose(float(plane_angle(a, b)), 1e-9, rel_tol=1e-6)
+
+    def test_eq_5_1_round_trip(self):
+        tx, ty = torch.tensor([0.3, -1.2]), torch.tensor([-0.4, 0.9])
+        n = angles_to_normal(tx, ty)
+        assert torch.allclose(reflection_matrix_from_angles(tx, ty), reflection_matrix(n), atol=1e-6)
+        tx2, ty2 = normal_to_angles(n)
+        assert torch.allclose(tx2, tx, atol=1e-6) and torch.allclose(ty2, ty, atol=1e-6)
+
+    def test_plane_from_reflection(self):
+        n = torch.tensor([0.6, 0.0, 0.8], dtype=torch.float64)
+        c = torch.tensor([1.0, 2.0, 3.0], dtype=torch.float64)
+        n2, b2 = plane_from_reflection(reflection_matrix(n), c)
+        assert torch.allclose(n2, n) and torch.allclose(b2, -(n * c).sum())

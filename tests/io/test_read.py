@@ -1,0 +1,80 @@
+import hashlib
+
+import numpy as np
+import pytest
+import torch
+
+import torchsym
+from torchsym.errors import InputFileError
+from torchsym.io import infer_kind, load_input, read_image, read_mesh, read_pointcloud, write_image, write_ply
+
+
+def _digest(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+class TestRead:
+    def test_ply_round_trip(self, tmp_path):
+        pts = torch.rand(50, 3)
+        write_ply(tmp_path / "a.ply", pts, colors=torch.rand(50, 3))
+        assert torch.allclose(read_pointcloud(tmp_path / "a.ply"), pts, atol=1e-6)
+        kind, data = load_input(tmp_path / "a.ply")
+        assert kind == "pointcloud"
+
+    def test_mesh_ply(self, tmp_path):
+        write_ply(tmp_path / "m.ply", torch.rand(4, 3), faces=torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        kind, mesh = load_input(tmp_path / "m.ply")
+        assert kind == "mesh" and mesh.faces.shape == (2, 3)
+        kind, pts = load_input(tmp_path / "m.ply", kind="pointcloud")
+        assert kind == "pointcloud" and pts.shape == (4, 3)
+
+    def test_xyz_and_npy(self, tmp_path):
+        pts = np.random.default_rng(0).random((20, 6))
+        np.savetxt(tmp_path / "a.xyz", pts)
+        assert read_pointcloud(tmp_path / "a.xyz").shape == (20, 3)
+        np.save(tmp_path / "b.npy", pts[:, :4])
+        kind, data = load_input(tmp_path / "b.npy")
+        assert kind == "points" and data.shape == (20, 4)
+
+    def test_files_not_modified(self, tmp_path):
+        p = tmp_path / "c.ply"
+        write_ply(p, torchsym.data.sample_pointcloud())
+        before = _digest(p)
+        torchsym.detect(p)
+        assert _digest(p) == before
+
+    def test_image(self, tmp_path):
+        img = torch.rand(3, 10, 12)
+        write_image(tmp_path / "i.png", img)
+        back = read_image(tmp_path / "i.png")
+        assert back.shape == (3, 10, 12) and torch.allclose(back, img, atol=1 / 255 + 1e-6)
+
+    def test_infer_kind(self):
+        assert infer_kind(torch.zeros(5, 3)) == "pointcloud"
+        assert infer_kind(torch.zeros(5, 4)) == "points"
+        assert infer_kind(torch.zeros(3, 8, 8)) == "image"
+
+    @pytest.mark.parametrize("name, content, message", [
+        ("nope.ply", None, "does not exist"),
+        ("junk.ply", b"this is not a ply file", "cannot read"),
+        ("junk.npy", b"garbage", "cannot read"),
+        ("junk.xyz", b"a b c\n", "cannot read"),
+        ("two.xyz", b"1 2\n3 4\n", "expected at least 3 columns"),
+        ("junk.png", b"not an image", "cannot decode"),
+        ("thing.abc", b"x", "cannot tell what"),
+    ])
+    def test_exception(self, tmp_path, name, content, message):
+        p = tmp_path / name
+        if content is not None:
+            p.write_bytes(content)
+        with pytest.raises(InputFileError, match=message):
+            load_input(p)
+
+    def test_mesh_without_faces(self, tmp_path):
+        write_ply(tmp_path / "pc.ply", torch.rand(5, 3))
+        with pytest.raises(InputFileError, match="holds no triangles"):
+            read_mesh(tmp_path / "pc.ply")
+
+    def test_real_mesh(self, shared_data):
+        mesh = read_mesh(shared_data / "meshes" / "dino.off")
+        assert mesh.vertices.shape == (3916, 3) and mesh.faces.shape == (7828, 3)

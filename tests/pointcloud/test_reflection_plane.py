@@ -1,0 +1,186 @@
+import math
+
+import numpy as np
+import pytest
+import torch
+
+import torchsym
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.geometry import plane_angle, point_plane_distance
+from torchsym.pointcloud import (
+    ReflectionPlaneDetector,
+    ReflectionPlaneResult,
+    add_outliers,
+    detect_reflection_plane,
+    mirror_complete,
+    perturb,
+    planted_symmetric_cloud,
+    random_rigid_motion,
+    remove_part,
+    sample_surface,
+)
+
+
+def _deg(a, b):
+    return float(plane_angle(a.double(), b.double())) * 180 / math.pi
+
+
+def _same_plane(res, normal, offset, atol_deg=0.05, atol_off=1e-2):
+    sign = 1.0 if float((res.normal * normal).sum()) > 0 else -1.0
+    return _deg(res.normal, normal) < atol_deg and abs(float(res.offset) * sign - float(offset)) < atol_off
+
+
+@pytest.fixture(scope="module")
+def cloud():
+    return planted_symmetric_cloud(3000, generator=3)
+
+
+class TestDetectReflectionPlane:
+    def test_smoke(self, cloud):
+        res = detect_reflection_plane(cloud.points)
+        assert isinstance(res, ReflectionPlaneResult)
+        assert res.normal.shape == (3,) and res.offset.shape == () and res.matrix.shape == (3, 3)
+        assert res.transform.shape == (4, 4) and res.inliers.shape == (3000,) and res.pairs.shape[1] == 2
+        assert math.isclose(float(res.normal.norm()), 1.0, rel_tol=1e-5)
+        assert res.converged
+
+    @pytest.mark.parametrize("seed", [0, 1, 2, 5])
+    def test_planted_symmetry_recovered(self, seed):
+        c = planted_symmetric_cloud(3000, generator=seed)
+        res = detect_reflection_plane(c.points)
+        assert _same_plane(res, c.normal, c.offset, atol_deg=1e-2, atol_off=1e-3)
+        assert res.score > 0.95
+
+    def test_pairs_are_true_mirrors(self, cloud):
+        res = detect_reflection_plane(cloud.points)
+        i, j = res.pairs[:, 0], res.pairs[:, 1]
+        off_plane = i != j
+        assert float((cloud.mirror[i[off_plane]] == j[off_plane]).float().mean()) > 0.99
+        # the centre lies on the plane
+        assert abs(float(point_plane_distance(res.center[None], res.normal, res.offset))) < 1e-4
+
+    def test_rigid_motion_moves_plane(self, cloud):
+        moved = random_rigid_motion(cloud, generator=11)
+        a = detect_reflection_plane(cloud.points)
+        b = detect_reflection_plane(moved.points)
+        assert _same_plane(a, cloud.normal, cloud.offset) and _same_plane(b, moved.normal, moved.offset)
+
+    def test_permutation_changes_nothing(self, cloud):
+        perm = torch.randperm(3000, generator=torch.Generator().manual_seed(4))
+        a = detect_reflection_plane(cloud.points)
+        b = detect_reflection_plane(cloud.points[perm])
+        assert _deg(a.normal, b.normal) < 1e-3
+        assert abs(a.score - b.score) < 1e-3
+        assert torch.equal(a.inliers[perm], b.inliers)
+
+    def test_same_seed_same_bits(self, cloud):
+        a = detect_reflection_plane(cloud.points, generator=7)
+        b = detect_reflection_plane(cloud.points, generator=7)
+        assert torch.equal(a.normal, b.normal) and torch.equal(a.offset, b.offset) and torch.equal(a.pairs, b.pairs)
+
+    def test_module_repeatable(self, cloud):
+        det = ReflectionPlaneDetector(seed=3)
+        a, b = det(cloud.points), det(cloud.points)
+        assert torch.equal(a.normal, b.normal)
+        assert "n_starts=3" in repr(det)
+
+    def test_float64_kept(self, cloud):
+        res = detect_reflection_plane(cloud.points.double())
+        assert res.normal.dtype == torch.float64
+
+    def test_outliers(self):
+        c = add_outliers(planted_symmetric_cloud(3000, generator=8), 100.0, generator=1)
+        res = detect_reflection_plane(c.points)
+        assert _deg(res.normal, c.normal) < 1.0
+
+    def test_missing_part(self):
+        c = remove_part(planted_symmetric_cloud(3000, generator=9), 0.15, generator=2)
+        res = detect_reflection_plane(c.points)
+        assert _deg(res.normal, c.normal) < 1.0
+
+    def test_perturbation(self):
+        c = perturb(planted_symmetric_cloud(3000, generator=10), 20.0, generator=2)
+        res = detect_reflection_plane(c.points)
+        assert _deg(res.normal, c.normal) < 5.0  # the correctness threshold of the benchmark
+
+    def test_thesis_variant_runs(self, cloud):
+        res = detect_reflection_plane(
+            cloud.points, init="grid", n_starts=1, pca_starts=False, coarse=False, accelerate=False, update="procrustes"
+        )
+        assert res.n_starts == 1 and res.iterations >= 1
+
+    def test_asymmetric_cloud_low_score(self):
+        g = torch.Generator().manual_seed(0)
+        # a random cloud with no reflection symmetry: clumps of random sizes at random places
+        centres = torch.rand(12, 3, generator=g) * 4
+        pts = (centres[torch.randint(0, 12, (3000,), generator=g)] + 0.3 * torch.rand(3000, 3, generator=g) ** 3)
+        res = detect_reflection_plane(pts)
+        sym = detect_reflection_plane(planted_symmetric_cloud(3000, generator=0).points)
+        assert res.score < 0.6 < sym.score
+
+    def test_planar_cloud_ok(self):
+        g = torch.Generator().manual_seed(1)
+        pts = torch.cat([torch.rand(500, 2, generator=g) * torch.tensor([2.0, 1.0]), torch.zeros(500, 1)], 1)
+        res = detect_reflection_plane(pts)
+        assert res.normal.shape == (3,)
+
+    @pytest.mark.parametrize(
+        "bad, kind, message",
+        [
+            (torch.tensor([[0.0, 0.0, float("nan")]] * 5), InputValueError, "points: expected finite values"),
+            (torch.tensor([[0.0, 0.0, float("inf")]] * 5), InputValueError, "points: expected finite values"),
+            (torch.zeros(3, 3), InputShapeError, r"points: expected \(N, D\) with D = 3 and N >= 4, got \(3, 3\)"),
+            (torch.zeros(10, 2), InputShapeError, r"got \(10, 2\)"),
+            (torch.zeros(10), InputShapeError, r"got \(10\)"),
+            (torch.linspace(0, 1, 30)[:, None] * torch.tensor([[1.0, 2.0, 3.0]]), InputValueError, "on one line"),
+            (torch.zeros(10, 3), InputValueError, "on one line"),
+        ],
+    )
+    def test_exception(self, bad, kind, message):
+        with pytest.raises(kind, match=message):
+            detect_reflection_plane(bad)
+
+    def test_exception_settings(self):
+        with pytest.raises(InputValueError, match="init: expected 'sphere' or 'grid', got 'random'"):
+            ReflectionPlaneDetector(init="random")
+        with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1, got 0"):
+            detect_reflection_plane(torch.rand(10, 3), n_starts=0)
+
+    def test_numpy_input(self, cloud):
+        res = torchsym.detect(cloud.points.numpy())
+        assert _same_plane(res, cloud.normal, cloud.offset)
+
+
+class TestSynthetic:
+    def test_planted_is_symmetric(self, cloud):
+        from torchsym.geometry import reflect_points
+
+        refl = reflect_points(cloud.points.double(), cloud.normal.double(), cloud.offset.double())
+        assert torch.allclose(refl, cloud.points[cloud.mirror].double(), atol=1e-4)
+
+    def test_corruptions(self, cloud):
+        assert add_outliers(cloud, 50, generator=0).points.shape[0] == 4500
+        assert remove_part(cloud, 0.28, generator=0).points.shape[0] == 3000 - 840
+        p = perturb(cloud, 100, generator=0)
+        ext = (cloud.points.max(0).values - cloud.points.min(0).values).min()
+        assert float((p.points - cloud.points).norm(dim=1).max()) <= float(ext) + 1e-5
+
+    def test_remove_part_keeps_mirror_indices(self, cloud):
+        c = remove_part(cloud, 0.2, generator=1)
+        has = c.mirror >= 0
+        from torchsym.geometry import reflect_points
+
+        refl = reflect_points(c.points[has].double(), c.normal.double(), c.offset.double())
+        assert torch.allclose(refl, c.points[c.mirror[has]].double(), atol=1e-4)
+
+    def test_mirror_complete_real_mesh(self, shared_data):
+        mesh = torchsym.io.read_mesh(shared_data / "meshes" / "cow.off")
+        pts = sample_surface(mesh, 4000, generator=0)
+        c = mirror_complete(pts, generator=1)
+        res = detect_reflection_plane(c.points)
+        assert _deg(res.normal, c.normal) < 0.1 and res.score > 0.9
+
+    def test_embedded_sample(self):
+        n, b = torchsym.data.sample_plane()
+        res = torchsym.detect(torchsym.data.sample_path("chair.ply"))
+        assert _same_plane(res, n, b, atol_deg=1e-2, atol_off=1e-3)

@@ -1,0 +1,37 @@
+import json
+import subprocess
+import sys
+
+import torchsym
+from torchsym.cli import main
+
+
+class TestCLI:
+    def test_help(self):
+        out = subprocess.run([sys.executable, "-m", "torchsym", "detect", "--help"], capture_output=True, text=True)
+        assert out.returncode == 0 and "--config" in out.stdout and "pipeline" in out.stdout
+
+    def test_demo(self, tmp_path, capsys):
+        assert main(["demo", "--out", str(tmp_path)]) == 0
+        assert (tmp_path / "chair.json").is_file() and (tmp_path / "chair_plane.png").is_file()
+        assert (tmp_path / "chair_plane.ply").is_file()
+        assert "angle to the true plane" in capsys.readouterr().out
+
+    def test_detect_with_config_and_set(self, tmp_path):
+        cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "pointcloud_plane.yaml"
+        args = ["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_starts=2", "--no-figures"]
+        if cfg.is_file():
+            args += ["--config", str(cfg)]
+        assert main(args) == 0
+        record = json.loads((tmp_path / "chair.json").read_text())
+        assert record["result"]["type"] == "ReflectionPlaneResult" and record["config"]["steps"][0]["params"]["n_starts"] == 2
+
+    def test_bad_input(self, tmp_path, capsys):
+        bad = tmp_path / "x.ply"
+        bad.write_text("nonsense")
+        assert main(["detect", str(bad), "--out", str(tmp_path)]) == 2
+        assert "cannot read" in capsys.readouterr().err
+
+    def test_unknown_setting(self, tmp_path, capsys):
+        code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_strats=2"])
+        assert code == 2 and "did you mean 'n_starts'" in capsys.readouterr().err

@@ -1,0 +1,3 @@
+from torchsym.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,74 @@
+"""``torchsym.detect``: one call from any input to its symmetry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import torch
+
+from torchsym.core.config import PipelineConfig, build_pipeline, default_config, load_config
+from torchsym.core.results import Result
+from torchsym.errors import ConfigError
+from torchsym.io.read import infer_kind, load_input
+
+__all__ = ["detect", "prepare"]
+
+
+def prepare(
+    input: Any, config: str | Path | Mapping[str, Any] | PipelineConfig | None = None, *, kind: str | None = None
+) -> tuple[str, Any, PipelineConfig]:
+    """Load ``input`` if it is a path, tell its kind and choose the config.
+
+    Returns ``(kind, data, config)``: the config is the one given, or the default
+    pipeline for the input's kind.
+    """
+    cfg = None
+    if config is not None:
+        cfg = config if isinstance(config, PipelineConfig) else load_config(config)
+    want = kind or (cfg.input if cfg is not None else None)
+    if isinstance(input, (str, Path)):
+        found, data = load_input(input, kind=want)
+    else:
+        data = torch.from_numpy(np.ascontiguousarray(input)) if isinstance(input, np.ndarray) else input
+        found = infer_kind(data)
+    if cfg is None:
+        cfg = default_config(kind or found)
+    elif found != cfg.input and not (found == "pointcloud" and cfg.input == "points"):
+        raise ConfigError(f"config: pipeline {cfg.source!r} takes {cfg.input!r} input, but the input is a {found}")
+    return found, data, cfg
+
+
+def detect(
+    input: Any,
+    config: str | Path | Mapping[str, Any] | PipelineConfig | None = None,
+    *,
+    kind: str | None = None,
+    **overrides: Any,
+) -> Result:
+    """Find the reflection symmetry of ``input`` with the pipeline its kind calls for.
+
+    Args:
+        input: a file path (point cloud, mesh or image), a tensor or array (``(N, 3)``
+            point cloud, ``(N, D)`` point set, ``(C, H, W)`` or ``(B, C, H, W)`` image), or
+            a :class:`torchsym.mesh.Mesh`.
+        config: a YAML path, a mapping, or a :class:`PipelineConfig`; None uses the
+            default pipeline for the input's kind.
+        kind: force the input kind (e.g. ``"pointcloud"`` to treat a mesh's vertices as
+            a point cloud).
+        **overrides: settings of the pipeline's last solver, checked against its
+            signature (e.g. ``n_init_samples=800``).
+
+    Returns:
+        The solver's typed result (e.g. :class:`torchsym.ReflectionPlaneResult`).
+
+    Example:
+        >>> import torchsym
+        >>> result = torchsym.detect(torchsym.data.sample_pointcloud())
+        >>> result.score > 0.9
+        True
+    """
+    _, data, cfg = prepare(input, config, kind=kind)
+    pipeline = build_pipeline(cfg, **overrides)
+    return pipeline(data)

@@ -1,0 +1,184 @@
+"""YAML configs that build solver pipelines.
+
+A config file names the input kind and a list of steps; each step names a registered
+solver and its settings::
+
+    input: pointcloud
+    steps:
+      - name: reflection_plane
+        params:
+          n_init_samples: 500
+
+Every key is checked before anything is built: unknown top-level keys, unknown solver
+names and parameters that the solver's constructor does not take are reported with the
+valid names. Files are read with ``yaml.safe_load``; a config never names import paths.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+from pathlib import Path
+from typing import Any, Mapping
+
+import yaml
+from torch import nn
+
+from torchsym.core.registry import INPUT_KINDS, SOLVERS, SolverEntry
+from torchsym.errors import ConfigError, InputFileError, TorchsymError
+
+__all__ = ["Pipeline", "PipelineConfig", "StepConfig", "build_pipeline", "default_config", "load_config"]
+
+_TOP_KEYS = {"input", "steps", "description"}
+_STEP_KEYS = {"name", "params"}
+
+
+@dataclasses.dataclass(frozen=True)
+class StepConfig:
+    """One step: a registered solver name and its settings."""
+
+    name: str
+    params: dict[str, Any]
+
+
+@dataclasses.dataclass(frozen=True)
+class PipelineConfig:
+    """A validated config: the input kind and its steps, in order."""
+
+    input: str
+    steps: tuple[StepConfig, ...]
+    description: str = ""
+    source: str = "<dict>"
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> "PipelineConfig":
+        """A copy whose last step's params are updated by ``overrides`` (checked)."""
+        if not overrides:
+            return self
+        last = self.steps[-1]
+        step = StepConfig(last.name, {**last.params, **dict(overrides)})
+        _check_params(SOLVERS.get(step.name), step.params, f"{self.source}: overrides")
+        return dataclasses.replace(self, steps=self.steps[:-1] + (step,))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "input": self.input,
+            "description": self.description,
+            "steps": [{"name": s.name, "params": dict(s.params)} for s in self.steps],
+        }
+
+
+def _suggest(word: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(word, choices, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _check_params(entry: SolverEntry, params: Mapping[str, Any], where: str) -> None:
+    valid = entry.parameters()
+    for key in params:
+        if key not in valid:
+            names = sorted(valid)
+            raise ConfigError(
+                f"{where}: unknown parameter {key!r} for solver {entry.name!r}{_suggest(key, names)}; "
+                f"valid parameters: {', '.join(names) or 'none'}"
+            )
+
+
+def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
+    """Read and validate a config from a YAML file path or a mapping.
+
+    Raises:
+        InputFileError: the file does not exist or is not valid YAML.
+        ConfigError: unknown keys, unknown solver names or parameters, bad types.
+    """
+    source = "<dict>"
+    if isinstance(config, (str, Path)):
+        path = Path(config)
+        source = str(path)
+        if not path.is_file():
+            raise InputFileError(f"config: file {str(path)!r} does not exist")
+        try:
+            raw = yaml.safe_load(path.read_text())
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            raise InputFileError(f"config: {str(path)!r} is not valid YAML ({exc})") from None
+    else:
+        raw = config
+    if not isinstance(raw, Mapping):
+        raise ConfigError(f"{source}: expected a mapping with keys {sorted(_TOP_KEYS)}, got {type(raw).__name__}")
+    for key in raw:
+        if key not in _TOP_KEYS:
+            raise ConfigError(f"{source}: unknown key {key!r}{_suggest(str(key), sorted(_TOP_KEYS))}; valid keys: {', '.join(sorted(_TOP_KEYS))}")
+    kind = raw.get("input")
+    if kind not in INPUT_KINDS or kind == "any":
+        kinds = sorted(k for k in INPUT_KINDS if k != "any")
+        raise ConfigError(f"{source}: 'input' must be one of {', '.join(kinds)}, got {kind!r}")
+    steps_raw = raw.get("steps")
+    if not isinstance(steps_raw, list) or not steps_raw:
+        raise ConfigError(f"{source}: 'steps' must be a non-empty list of {{name, params}}, got {steps_raw!r}")
+    steps = []
+    for i, s in enumerate(steps_raw):
+        where = f"{source}: steps[{i}]"
+        if isinstance(s, str):
+            s = {"name": s}
+        if not isinstance(s, Mapping):
+            raise ConfigError(f"{where}: expected a mapping with 'name' and 'params', got {s!r}")
+        for key in s:
+            if key not in _STEP_KEYS:
+                raise ConfigError(f"{where}: unknown key {key!r}{_suggest(str(key), sorted(_STEP_KEYS))}; valid keys: name, params")
+        name = s.get("name")
+        if not isinstance(name, str):
+            raise ConfigError(f"{where}: 'name' must be a solver name, got {name!r}")
+        if name not in SOLVERS:
+            raise ConfigError(f"{where}: unknown solver {name!r}{_suggest(name, SOLVERS.names())}; known: {', '.join(SOLVERS.names())}")
+        params = s.get("params") or {}
+        if not isinstance(params, Mapping):
+            raise ConfigError(f"{where}: 'params' must be a mapping, got {params!r}")
+        entry = SOLVERS.get(name)
+        _check_params(entry, params, where)
+        if i == 0 and entry.kind not in (kind, "any"):
+            raise ConfigError(f"{where}: solver {name!r} takes {entry.kind!r} input, but the config's input is {kind!r}")
+        steps.append(StepConfig(name, dict(params)))
+    return PipelineConfig(kind, tuple(steps), str(raw.get("description", "")), source)
+
+
+def default_config(kind: str) -> PipelineConfig:
+    """The default one-step pipeline for inputs of ``kind``."""
+    entry = SOLVERS.default_for(kind)
+    return PipelineConfig(kind, (StepConfig(entry.name, {}),), f"default pipeline for {kind}", "<default>")
+
+
+class Pipeline(nn.Module):
+    """Registered solvers run in order; each step gets the previous step's output."""
+
+    def __init__(self, config: PipelineConfig) -> None:
+        super().__init__()
+        self.config = config
+        steps = []
+        for i, s in enumerate(config.steps):
+            entry = SOLVERS.get(s.name)
+            try:
+                steps.append(entry.cls(**s.params))
+            except TorchsymError as exc:
+                raise ConfigError(f"{config.source}: steps[{i}] ({s.name}): {exc}") from None
+        self.steps = nn.ModuleList(steps)
+
+    @property
+    def input_kind(self) -> str:
+        return self.config.input
+
+    def forward(self, data: Any) -> Any:
+        out = data
+        for step in self.steps:
+            out = step(out)
+        return out
+
+    def extra_repr(self) -> str:
+        return f"input={self.config.input!r}, source={self.config.source!r}"
+
+
+def build_pipeline(config: str | Path | Mapping[str, Any] | PipelineConfig, **overrides: Any) -> Pipeline:
+    """Build a :class:`Pipeline` from a config (path, mapping or :class:`PipelineConfig`).
+
+    ``overrides`` update the last step's settings and are checked like the file's.
+    """
+    cfg = config if isinstance(config, PipelineConfig) else load_config(config)
+    return Pipeline(cfg.with_overrides(overrides))

@@ -1,0 +1,114 @@
+"""A small registry of solvers by short name (after fvcore's).
+
+A solver is an ``nn.Module`` whose constructor takes only keyword settings with defaults
+and whose ``forward`` takes the input (a point tensor, an image tensor, a mesh, or the
+previous step's output) and returns a :class:`~torchsym.core.results.Result`.
+
+    @register_solver("reflection_plane", kind="pointcloud", default=True)
+    class ReflectionPlaneDetector(nn.Module): ...
+
+``SOLVERS.get(name)`` fails with a message that lists every registered name. Config files
+name solvers by these short names only, never by import path, so a config cannot run
+arbitrary code and keeps working when a module moves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+from typing import Any, Callable, TypeVar
+
+from torchsym.errors import ConfigError
+
+__all__ = ["INPUT_KINDS", "Registry", "SOLVERS", "SolverEntry", "register_solver"]
+
+#: The kinds of input torchsym knows, and what each is.
+INPUT_KINDS: dict[str, str] = {
+    "pointcloud": "a 3D point cloud, (N, 3) float",
+    "points": "a d-dimensional point set, (N, D) float, D >= 2",
+    "image": "an image, (B, C, H, W) float in [0, 1]",
+    "mesh": "a triangle mesh (torchsym.mesh.Mesh)",
+    "any": "the previous step's output",
+}
+
+T = TypeVar("T")
+
+
+@dataclasses.dataclass(frozen=True)
+class SolverEntry:
+    """One registered solver: its class, the input kind it takes and a one-line summary."""
+
+    name: str
+    cls: type
+    kind: str
+    summary: str
+
+    def parameters(self) -> dict[str, inspect.Parameter]:
+        """The constructor's keyword parameters by name (``self`` left out)."""
+        sig = inspect.signature(self.cls.__init__)
+        return {
+            k: p
+            for k, p in sig.parameters.items()
+            if k != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+        }
+
+    def defaults(self) -> dict[str, Any]:
+        """The constructor's default settings."""
+        return {k: p.default for k, p in self.parameters().items() if p.default is not inspect.Parameter.empty}
+
+
+class Registry:
+    """Maps short names to solver classes, with one default solver per input kind."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self._entries: dict[str, SolverEntry] = {}
+        self._defaults: dict[str, str] = {}
+
+    def register(self, name: str, *, kind: str, default: bool = False) -> Callable[[T], T]:
+        """Decorator registering a class under ``name`` for inputs of ``kind``."""
+        if kind not in INPUT_KINDS:
+            raise ValueError(f"kind: expected one of {sorted(INPUT_KINDS)}, got {kind!r}")
+
+        def deco(cls: T) -> T:
+            if name in self._entries and self._entries[name].cls is not cls:
+                raise ValueError(f"{self.what} {name!r} is already registered to {self._entries[name].cls.__name__}")
+            doc = (inspect.getdoc(cls) or "").strip().splitlines()
+            self._entries[name] = SolverEntry(name, cls, kind, doc[0] if doc else "")  # type: ignore[arg-type]
+            if default:
+                self._defaults[kind] = name
+            return cls
+
+        return deco
+
+    def get(self, name: str) -> SolverEntry:
+        """The entry named ``name``; :class:`ConfigError` listing the known names if none."""
+        try:
+            return self._entries[name]
+        except KeyError:
+            raise ConfigError(f"unknown {self.what} {name!r}; known: {', '.join(sorted(self._entries)) or 'none'}") from None
+
+    def default_for(self, kind: str) -> SolverEntry:
+        """The default solver for inputs of ``kind``."""
+        if kind not in self._defaults:
+            known = ", ".join(f"{k} -> {v}" for k, v in sorted(self._defaults.items()))
+            raise ConfigError(f"no default {self.what} for input kind {kind!r}; defaults: {known or 'none'}")
+        return self._entries[self._defaults[kind]]
+
+    def names(self, kind: str | None = None) -> list[str]:
+        """Registered names, optionally only those taking ``kind``."""
+        return sorted(n for n, e in self._entries.items() if kind is None or e.kind == kind)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._entries
+
+    def __iter__(self):
+        return iter(self._entries.values())
+
+
+SOLVERS = Registry("solver")
+
+
+def register_solver(name: str, *, kind: str, default: bool = False) -> Callable[[T], T]:
+    """Register a solver class in :data:`SOLVERS` (see :meth:`Registry.register`)."""
+    return SOLVERS.register(name, kind=kind, default=default)

@@ -1,0 +1,94 @@
+"""The base class of every result torchsym returns.
+
+A result is a frozen dataclass whose fields are tensors, numbers, strings, or nested
+results. ``to_dict()`` turns it into plain Python (lists, floats) for JSON; ``to(device)``
+moves every tensor. Subclasses document each field with its shape and may override
+:meth:`Result.write_artifacts` to write pictures a person can look at.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+__all__ = ["Result", "to_jsonable"]
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert tensors, arrays, dataclasses and containers to JSON-friendly Python."""
+    if isinstance(value, Result):
+        return value.to_dict()
+    if isinstance(value, torch.Tensor):
+        value = value.detach().cpu()
+        if value.dtype == torch.bool:
+            return value.tolist()
+        return to_jsonable(value.numpy())
+    if isinstance(value, np.ndarray):
+        if np.issubdtype(value.dtype, np.floating):
+            return [to_jsonable(v) for v in value] if value.ndim else to_jsonable(float(value))
+        return value.tolist()
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: to_jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    return value
+
+
+def _move(value: Any, device: torch.device | str) -> Any:
+    if isinstance(value, torch.Tensor):
+        return value.to(device)
+    if isinstance(value, Result):
+        return value.to(device)
+    if isinstance(value, dict):
+        return {k: _move(v, device) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_move(v, device) for v in value)
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class Result:
+    """Base of every solver result: a frozen dataclass with JSON and device helpers."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as plain Python (tensors become nested lists), plus ``type``."""
+        out: dict[str, Any] = {"type": type(self).__name__}
+        for f in dataclasses.fields(self):
+            out[f.name] = to_jsonable(getattr(self, f.name))
+        return out
+
+    def to_json(self, path: str | Path | None = None, *, indent: int | None = 2) -> str:
+        """The result as JSON text; also written to ``path`` when given."""
+        text = json.dumps(self.to_dict(), indent=indent)
+        if path is not None:
+            Path(path).write_text(text)
+        return text
+
+    def to(self, device: torch.device | str) -> "Result":
+        """A copy with every tensor moved to ``device``."""
+        changes = {f.name: _move(getattr(self, f.name), device) for f in dataclasses.fields(self)}
+        return dataclasses.replace(self, **changes)
+
+    def write_artifacts(self, data: Any, out_dir: Path, stem: str) -> list[Path]:
+        """Write pictures of this result on ``data`` into ``out_dir``; returns the paths.
+
+        The base class writes nothing; each family of results overrides it.
+        """
+        return []

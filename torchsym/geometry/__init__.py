@@ -1,0 +1,29 @@
+"""Reflection geometry in d dimensions, batched and differentiable."""
+
+from torchsym.geometry.reflection import (
+    angles_to_normal,
+    normal_to_angles,
+    plane_angle,
+    plane_from_pairs,
+    plane_from_reflection,
+    plane_to_plane_distance,
+    point_plane_distance,
+    reflect_points,
+    reflection_matrix,
+    reflection_matrix_from_angles,
+    reflection_transform,
+)
+
+__all__ = [
+    "angles_to_normal",
+    "normal_to_angles",
+    "plane_angle",
+    "plane_from_pairs",
+    "plane_from_reflection",
+    "plane_to_plane_distance",
+    "point_plane_distance",
+    "reflect_points",
+    "reflection_matrix",
+    "reflection_matrix_from_angles",
+    "reflection_transform",
+]

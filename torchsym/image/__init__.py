@@ -1,0 +1,3 @@
+"""Reflection symmetry in photographs (thesis Ch. 2-4)."""
+
+__all__: list[str] = []

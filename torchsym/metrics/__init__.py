@@ -1,0 +1,4 @@
+"""Evaluation protocols of every chapter, as library functions."""
+
+from torchsym.metrics.plane import *  # noqa: F401,F403
+from torchsym.metrics.pr import *  # noqa: F401,F403

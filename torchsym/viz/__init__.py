@@ -1,0 +1,1 @@
+"""Pictures of results: PLY files and PNG figures a person can look at."""
