@@ -152,9 +152,17 @@ def add_outliers(cloud: SymmetricCloud, tau: float, *, generator: torch.Generato
     return SymmetricCloud(torch.cat([pts, noise]), cloud.normal, cloud.offset, mirror)
 
 
-def perturb(cloud: SymmetricCloud, w: float, *, generator: torch.Generator | int | None = None) -> SymmetricCloud:
+def perturb(
+    cloud: SymmetricCloud, w: float, *, isotropic: bool = False, generator: torch.Generator | int | None = None
+) -> SymmetricCloud:
     """Move every point by ``r (sin t cos p, sin t sin p, cos t)`` with ``r ~ U(0, h)``,
-    ``t ~ U(0, pi)``, ``p ~ U(0, 2 pi)`` and ``h = w x min box side / 100`` (thesis 5.2.4)."""
+    ``t ~ U(0, pi)``, ``p ~ U(0, 2 pi)`` and ``h = w x min box side / 100`` (thesis 5.2.4).
+
+    Drawing ``t`` uniformly, as the thesis does, puts twice the variance on the z axis as
+    on x or y: on a cloud whose plane is not upright this anisotropy itself breaks the
+    symmetry. ``isotropic=True`` draws ``cos t ~ U(-1, 1)`` instead (directions uniform on
+    the sphere), which blurs the shape without favouring any direction.
+    """
     check_positive(w, "w", allow_zero=True)
     gen = make_generator(generator)
     pts = cloud.points
@@ -162,7 +170,8 @@ def perturb(cloud: SymmetricCloud, w: float, *, generator: torch.Generator | int
     h = w * float(ext.min()) / 100.0
     n = pts.shape[0]
     r = torch.rand(n, generator=gen, dtype=torch.float64) * h
-    t = torch.rand(n, generator=gen, dtype=torch.float64) * math.pi
+    u = torch.rand(n, generator=gen, dtype=torch.float64)
+    t = torch.acos(1.0 - 2.0 * u) if isotropic else u * math.pi
     p = torch.rand(n, generator=gen, dtype=torch.float64) * 2 * math.pi
     d = torch.stack([r * torch.sin(t) * torch.cos(p), r * torch.sin(t) * torch.sin(p), r * torch.cos(t)], 1)
     return SymmetricCloud(pts + d.to(pts.dtype), cloud.normal, cloud.offset, cloud.mirror)
