@@ -491,7 +491,7 @@ def detect_reflection_plane(
     centered = x - x.mean(0)
     sv = torch.linalg.svdvals(centered.double())
     # the second singular value is at rounding level of the coordinates: one line
-    if scale == 0 or float(sv[1]) <= 1e3 * torch.finfo(x.dtype).eps * float(sv[0]):
+    if scale == 0 or float(sv[1]) <= 1e3 * torch.finfo(pts.dtype).eps * float(sv[0]):
         raise InputValueError(f"points: expected a cloud spanning at least a plane, got {n} points on one line")
     origin = x.median(0).values
     xs = (x - origin) / scale  # (N, 3), diagonal 1
