@@ -156,10 +156,12 @@ def _score_normals(sample: torch.Tensor, index: KNNIndex, normals: torch.Tensor,
     """
     offsets = -(sample @ normals.T).median(0).values  # (K,)
     refl = reflect_points(sample.expand(normals.shape[0], -1, -1), normals, offsets)  # (K, n2, 3)
-    dist, _ = index.query(refl.reshape(-1, 3))
-    dist = dist.reshape(normals.shape[0], -1)
     if sigmas is None:
-        return offsets, [dist.pow(2).sum(1).sqrt()]
+        dist, _ = index.query(refl.reshape(-1, 3))
+        return offsets, [dist.reshape(normals.shape[0], -1).pow(2).sum(1).sqrt()]
+    # beyond 4 sigma the kernel is below 1e-3: no need to search that far
+    dist, _ = index.query(refl.reshape(-1, 3), max_distance=4.0 * max(sigmas))
+    dist = dist.reshape(normals.shape[0], -1)
     d2 = dist.pow(2)
     return offsets, [-torch.exp(-0.5 * d2 / (s * s)).mean(1) for s in sigmas]
 
@@ -254,12 +256,13 @@ def _point_to_plane_step(x, q, nu, normal, offset, robust: bool):
     return m / norm, (offset + step[2]) / norm
 
 
-def _pre_align(sub, index, nu, normal, offset, *, max_iter: int, tol_angle: float):
-    """Point-to-plane Gauss-Newton from one start; returns ``(normal, offset, iterations)``."""
+def _pre_align(queries, targets, index, nu, normal, offset, *, max_iter: int, tol_angle: float):
+    """Point-to-plane Gauss-Newton from one start: mirror images of ``queries`` matched in
+    ``targets`` (normals ``nu``); returns ``(normal, offset, iterations)``."""
     it = 0
     for it in range(1, max_iter + 1):
-        _, j = index.query(reflect_points(sub, normal, offset))
-        n_new, b_new = _point_to_plane_step(sub, sub[j], nu[j], normal, offset, robust=True)
+        _, j = index.query(reflect_points(queries, normal, offset))
+        n_new, b_new = _point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
         moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
@@ -327,7 +330,8 @@ def _refine(
     ``tol_offset`` (converged), or after ``patience`` steps without a lower median
     residual (not converged; the best plane seen is returned).
 
-    Returns ``(normal, offset, iterations, converged, median residual)``.
+    Returns ``(normal, offset, iterations, converged, median residual, residuals,
+    nearest indices)``; the last two are for the returned plane, or None.
     """
 
     def evaluate(n_: torch.Tensor, b_: torch.Tensor):
@@ -349,7 +353,7 @@ def _refine(
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
         d_new, j_new, m_new = evaluate(n_new, b_new)
-        if accelerate:
+        if accelerate and float(plane_angle(n_new, normal)) * 180.0 / math.pi > 50 * tol_angle:
             dn, db = n_new - normal, b_new - offset
             alpha = 2.0
             while alpha <= 64.0:
@@ -375,8 +379,9 @@ def _refine(
             stalled += 1
             if stalled >= patience:
                 normal, offset, med = best
+                dist = None
                 break
-    return normal, offset, it, converged, med
+    return normal, offset, it, converged, med, dist, nn_idx
 
 
 def detect_reflection_plane(
@@ -526,14 +531,17 @@ def detect_reflection_plane(
     # Refine every start on the subsample; keep the one most points agree with.
     sub_tol = inlier_factor * spacing
     sub_normals = _point_normals(sub, sub_index) if coarse else None
+    align_q = sub[random_subset(sub.shape[0], 1000, gen)] if sub.shape[0] > 1000 else sub
     best = None
     iters = 0
     tried = 0
     for nk, bk in starts:
         if coarse:
-            nk, bk, it_k = _pre_align(sub, sub_index, sub_normals, nk, bk, max_iter=coarse_iter, tol_angle=coarse_tol)
+            nk, bk, it_k = _pre_align(
+                align_q, sub, sub_index, sub_normals, nk, bk, max_iter=coarse_iter, tol_angle=coarse_tol
+            )
         else:
-            nk, bk, it_k, _, _ = _refine(
+            nk, bk, it_k, _, _, _, _ = _refine(
                 sub, sub_index, nk, bk, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
                 accelerate=accelerate,
             )
@@ -549,6 +557,7 @@ def detect_reflection_plane(
     t_refine = time.perf_counter()
 
     # Algorithm 6 from the winner, to the thesis's tolerances, on up to n_polish_samples.
+    final = None
     full_index = KNNIndex(xs) if sub is not xs else sub_index
     if polish:
         if n > n_polish_samples:
@@ -556,13 +565,16 @@ def detect_reflection_plane(
             pol_index = KNNIndex(pol)
         else:
             pol, pol_index = xs, full_index
-        normal, offset, it2, converged, _ = _refine(
+        normal, offset, it2, converged, _, pdist, pnn = _refine(
             pol, pol_index, normal, offset, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
             accelerate=accelerate,
         )
         iters += it2
-    refl = reflect_points(xs, normal, offset)
-    dist, nn_idx = full_index.query(refl)
+        if pol is xs and pdist is not None:
+            final = (pdist, pnn)
+    if final is None:
+        final = full_index.query(reflect_points(xs, normal, offset))
+    dist, nn_idx = final
     spacing_q = xs[random_subset(n, 1000, gen)]
     sd, _ = full_index.query(spacing_q, k=2)
     spacing = float(sd[:, 1].median())
