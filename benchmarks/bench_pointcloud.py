@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import statistics
 import sys
 import time
@@ -144,6 +143,7 @@ def main(argv=None) -> int:
     ap.add_argument("--planes", type=int, default=2, help="random planes per mesh")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--quick", action="store_true", help="fewer levels (for a smoke run)")
+    ap.add_argument("--timing-only", action="store_true", help="only the timing table (reuses the protocol rows in --out)")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = ap.parse_args(argv)
     torch.set_num_threads(2)
@@ -166,6 +166,9 @@ def main(argv=None) -> int:
     print(f"{len(cases)} mirror-completed clouds of ~{args.n} points from {args.data}")
     rows = []
     protocols = {k: (key, levels[:: 2] if args.quick else levels) for k, (key, levels) in PROTOCOLS.items()}
+    if args.timing_only:
+        rows = json.loads((args.out / "pointcloud.json").read_text())["rows"]
+        protocols = {}
     for proto, (key, levels) in protocols.items():
         for level in levels:
             for mname, method in methods.items():

@@ -10,7 +10,6 @@ import math
 import statistics
 import time
 
-import torch
 
 __all__ = ["quick_pointcloud_benchmark"]
 

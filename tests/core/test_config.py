@@ -1,7 +1,6 @@
 from pathlib import Path
 
 import pytest
-import torch
 
 import torchsym
 from torchsym.core.config import build_pipeline, default_config, load_config

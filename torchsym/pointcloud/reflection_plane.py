@@ -46,16 +46,10 @@ from torchsym.core.random import make_generator, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result
 from torchsym.errors import InputValueError
-from torchsym.geometry.reflection import (
-    angles_to_normal,
-    plane_angle,
-    plane_from_pairs,
-    plane_from_reflection,
-    reflect_points,
-    reflection_matrix,
-    reflection_transform,
-)
+from torchsym.geometry.reflection import plane_angle, reflect_points, reflection_matrix, reflection_transform
 from torchsym.matching.knn import KNNIndex, mutual_nearest
+from torchsym.pointcloud.alignment import alternate, point_normals, pre_align, support
+from torchsym.pointcloud.candidates import initial_normals, sphere_normals
 
 __all__ = ["ReflectionPlaneDetector", "ReflectionPlaneResult", "detect_reflection_plane", "sphere_normals"]
 
@@ -118,272 +112,6 @@ class ReflectionPlaneResult(Result):
         ]
 
 
-def sphere_normals(count: int, *, dtype: torch.dtype = torch.float64) -> torch.Tensor:
-    """``(count, 3)`` near-uniform unit normals on the upper half sphere (Fibonacci lattice).
-
-    Every plane through the origin has exactly one normal with ``z >= 0``, so the half
-    sphere covers all planes; ``count = 200`` leaves no plane further than about
-    7 degrees from a sample, well inside the 10-degree basin of thesis Sec. 5.2.3.
-    """
-    i = torch.arange(count, dtype=dtype) + 0.5
-    z = 1.0 - i / count  # uniform in (0, 1]
-    r = torch.sqrt((1.0 - z * z).clamp_min(0))
-    phi = i * math.pi * (3.0 - math.sqrt(5.0))
-    return torch.stack([r * torch.cos(phi), r * torch.sin(phi), z], dim=1)
-
-
-def _grid_normals(step_deg: float, dtype: torch.dtype) -> torch.Tensor:
-    """The (theta_x, theta_y) grid of Algorithm 5, as normals (Eq. 5.1)."""
-    angles = torch.arange(-90.0, 90.0 + 1e-9, step_deg, dtype=dtype) * (math.pi / 180.0)
-    tx, ty = torch.meshgrid(angles, angles, indexing="ij")
-    return angles_to_normal(tx.reshape(-1), ty.reshape(-1))
-
-
-def _score_normals(sample: torch.Tensor, index: KNNIndex, normals: torch.Tensor, sigmas: tuple[float, ...] | None):
-    """Offsets and costs of planes with the given normals through the sample's middle.
-
-    Each plane passes through the median of the sample's projections on its normal: the
-    centre of a symmetric 1-D distribution, robust to outliers and, unlike Algorithm 5's
-    coordinate-wise median, unchanged by rotating the cloud. Mirror images of the sample
-    are matched in the denser refinement subsample (against the sample itself, sampling
-    gaps hide the difference between good and bad planes). The cost is the thesis's
-    Frobenius norm (``sigmas=None``), or for each ``sigma`` minus the mean Welsch kernel
-    ``exp(-d^2 / 2 sigma^2)`` of the residuals ``d``: bounded, so outliers cannot dominate
-    it, and smooth, so a plane a few degrees off still scores (the median residual, tried
-    first, ranked the true basin badly on shapes with strong partial symmetries).
-
-    Returns ``offsets (K,)`` and a list of ``(K,)`` costs, one per sigma.
-    """
-    offsets = -(sample @ normals.T).median(0).values  # (K,)
-    refl = reflect_points(sample.expand(normals.shape[0], -1, -1), normals, offsets)  # (K, n2, 3)
-    if sigmas is None:
-        dist, _ = index.query(refl.reshape(-1, 3))
-        return offsets, [dist.reshape(normals.shape[0], -1).pow(2).sum(1).sqrt()]
-    # beyond 4 sigma the kernel is below 1e-3: no need to search that far
-    dist, _ = index.query(refl.reshape(-1, 3), max_distance=4.0 * max(sigmas))
-    dist = dist.reshape(normals.shape[0], -1)
-    d2 = dist.pow(2)
-    return offsets, [-torch.exp(-0.5 * d2 / (s * s)).mean(1) for s in sigmas]
-
-
-def _initial_normals(
-    sample: torch.Tensor,
-    index: KNNIndex,
-    *,
-    init: str,
-    n_directions: int,
-    grid_step: float,
-    beam: int,
-    spacing: float,
-    dtype: torch.dtype,
-):
-    """Candidate normals with offsets, ranked (Algorithm 5, refined by a beam search).
-
-    ``init="grid"`` scores the thesis's (theta_x, theta_y) grid by the Frobenius residual
-    and stops there. ``init="sphere"`` scores ``n_directions`` near-uniform normals with
-    two Welsch kernels: a narrow one (2 point spacings), which outliers cannot fool, and a
-    wide one (8 spacings), which still rewards a plane a few degrees off on clean thin
-    shapes. Around the ``beam`` best by the narrow kernel, two rounds score six normals
-    at half the previous radius each. The result interleaves the two rankings.
-
-    Returns ``(normals (K, 3), offsets (K,), order)`` with ``order`` the candidates' indices,
-    best first.
-    """
-    if init == "grid":
-        normals = _grid_normals(grid_step, torch.float64).to(dtype)
-        offsets, (cost,) = _score_normals(sample, index, normals, None)
-        return normals, offsets, cost.argsort()
-    normals = sphere_normals(n_directions).to(dtype)
-    offsets, (cost, wide) = _score_normals(sample, index, normals, (2.0 * spacing, 8.0 * spacing))
-    wide_order = wide.argsort()
-    radius = math.sqrt(2.0 * math.pi / n_directions) * 0.5  # half the lattice spacing, radians
-    ring = torch.linspace(0, 2 * math.pi, 7, dtype=dtype)[:-1]
-    for _ in range(2):
-        top = cost.argsort()[:beam]
-        base = normals[top]  # (B, 3)
-        helper = torch.where(base[:, :1].abs() < 0.9, torch.tensor([1.0, 0.0, 0.0], dtype=dtype), torch.tensor([0.0, 1.0, 0.0], dtype=dtype))
-        u = torch.linalg.cross(base, helper)
-        u = u / u.norm(dim=1, keepdim=True)
-        v = torch.linalg.cross(base, u)
-        step = math.tan(radius)
-        new = base[:, None] + step * (torch.cos(ring)[None, :, None] * u[:, None] + torch.sin(ring)[None, :, None] * v[:, None])
-        new = (new / new.norm(dim=-1, keepdim=True)).reshape(-1, 3)
-        new_off, (new_cost,) = _score_normals(sample, index, new, (2.0 * spacing,))
-        normals = torch.cat([normals, new])
-        offsets = torch.cat([offsets, new_off])
-        cost = torch.cat([cost, new_cost])
-        radius *= 0.5
-    narrow_order = cost.argsort()
-    order = torch.stack([narrow_order[: len(wide_order)], wide_order], 1).reshape(-1)
-    return normals, offsets, order
-
-
-def _point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
-    """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
-    _, j = index.query(points, k=min(k, points.shape[0]))
-    nb = points[j]  # (N, k, 3)
-    nb = nb - nb.mean(1, keepdim=True)
-    _, vecs = torch.linalg.eigh(nb.transpose(1, 2) @ nb)
-    return vecs[:, :, 0]
-
-
-def _point_to_plane_step(x, q, nu, normal, offset, robust: bool):
-    """One Gauss-Newton step for the plane minimising ``sum w_i (nu_i . (reflect(x_i) - q_i))^2``.
-
-    The normal moves in its tangent plane (two parameters) and the offset freely. Weights
-    are Cauchy's, ``1 / (1 + (r / s)^2)`` with ``s`` 2.5 times the median absolute
-    residual, so outliers pull little; ``robust=False`` weighs all pairs 1.
-    """
-    dtype = x.dtype
-    helper = torch.tensor([1.0, 0.0, 0.0] if abs(float(normal[0])) < 0.9 else [0.0, 1.0, 0.0], dtype=dtype)
-    u = torch.linalg.cross(normal, helper)
-    u = u / u.norm()
-    basis = torch.stack([u, torch.linalg.cross(normal, u)], 1)  # (3, 2)
-    signed = x @ normal + offset  # (N,)
-    r = ((x - 2.0 * signed[:, None] * normal - q) * nu).sum(1)  # (N,)
-    nun = nu @ normal
-    jac = -2.0 * torch.cat([nun[:, None] * (x @ basis) + signed[:, None] * (nu @ basis), nun[:, None]], 1)  # (N, 3)
-    if robust:
-        s = 2.5 * r.abs().median().clamp_min(torch.finfo(dtype).eps)
-        w = 1.0 / (1.0 + (r / s) ** 2)
-    else:
-        w = torch.ones_like(r)
-    a = (jac * w[:, None]).T @ jac
-    g = (jac * w[:, None]).T @ r
-    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype), g[:, None]).solution[:, 0]
-    m = normal + basis @ step[:2]
-    norm = m.norm()
-    return m / norm, (offset + step[2]) / norm
-
-
-def _pre_align(queries, targets, index, nu, normal, offset, *, max_iter: int, tol_angle: float):
-    """Point-to-plane Gauss-Newton from one start: mirror images of ``queries`` matched in
-    ``targets`` (normals ``nu``); returns ``(normal, offset, iterations)``."""
-    it = 0
-    for it in range(1, max_iter + 1):
-        _, j = index.query(reflect_points(queries, normal, offset))
-        n_new, b_new = _point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
-        if float((n_new * normal).sum()) < 0:
-            n_new, b_new = -n_new, -b_new
-        moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
-        normal, offset = n_new, b_new
-        if moved < tol_angle:
-            break
-    return normal, offset, it
-
-
-def _support(points, index, normal, offset, sigma: float):
-    """Soft share of points whose mirror image lands near the set: the mean of
-    ``exp(-d^2 / 2 sigma^2)`` over residuals ``d`` (a continuous inlier fraction), and the
-    median residual."""
-    d, _ = index.query(reflect_points(points, normal, offset))
-    return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
-
-
-def _fit(points: torch.Tensor, nn_idx: torch.Tensor, keep: torch.Tensor, update: str, center: torch.Tensor):
-    """Refit the plane to the kept pairs ``(i, nn_idx[i])``."""
-    p = points[keep]
-    q = points[nn_idx[keep]]
-    if update == "reflection":
-        return plane_from_pairs(p, q)
-    # Thesis Algorithm 6, steps 9-12: S from the SVD of the cross-covariance about c,
-    # then c from (I - S) c = (I - S)(S p + q) / 2 averaged; the plane is read off S.
-    pc, qc = p - center, q - center
-    w = qc.T @ pc  # (3, 3)
-    u, _, vh = torch.linalg.svd(w)
-    s = u @ vh
-    if torch.det(s) > 0:  # closest orthogonal matrix with det -1
-        u = u.clone()
-        u[:, -1] = -u[:, -1]
-        s = u @ vh
-    n, _ = plane_from_reflection(s)
-    # The c-step: only n . c is determined, by the mean of (n . (S p) + n . q) / 2.
-    rhs = 0.5 * ((p @ s.T) + q).mean(0)
-    c = center + n * ((rhs - center) @ n)
-    return n, -(n * c).sum()
-
-
-def _refine(
-    points: torch.Tensor,
-    index: KNNIndex,
-    normal: torch.Tensor,
-    offset: torch.Tensor,
-    *,
-    update: str,
-    max_iter: int,
-    tol_angle: float,
-    tol_offset: float,
-    accelerate: bool,
-    patience: int = 5,
-):
-    """Algorithm 6 on ``points`` (queried against ``index`` over the same points).
-
-    Each step pairs every point with the nearest neighbour of its mirror image, keeps
-    the mutual pairs whose residual is at most the median (the truncated L2 loss of
-    Sec. 5.2.3), and refits the plane. Nearest-neighbour pairs slide along smooth
-    surfaces, so far from the optimum the plane creeps by a near-constant small angle
-    per step. With ``accelerate`` the step is extrapolated (x2, x4, ... as in Besl and
-    McKay's accelerated ICP) while the median residual keeps falling; a step is never
-    taken unless it lowers that residual.
-
-    It ends when the normal moves less than ``tol_angle`` degrees and the offset less than
-    ``tol_offset`` (converged), or after ``patience`` steps without a lower median
-    residual (not converged; the best plane seen is returned).
-
-    Returns ``(normal, offset, iterations, converged, median residual, residuals,
-    nearest indices)``; the last two are for the returned plane, or None.
-    """
-
-    def evaluate(n_: torch.Tensor, b_: torch.Tensor):
-        d_, j_ = index.query(reflect_points(points, n_, b_))
-        return d_, j_, d_.median()
-
-    converged = False
-    it = 0
-    dist, nn_idx, med = evaluate(normal, offset)
-    best = (normal, offset, med)
-    stalled = 0
-    for it in range(1, max_iter + 1):
-        mutual = mutual_nearest(nn_idx, nn_idx)  # same set both ways: free mutual test
-        keep = mutual & (dist <= med)
-        if int(keep.sum()) < 3:
-            keep = dist <= med
-        center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
-        n_new, b_new = _fit(points, nn_idx, keep, update, center)
-        if float((n_new * normal).sum()) < 0:
-            n_new, b_new = -n_new, -b_new
-        d_new, j_new, m_new = evaluate(n_new, b_new)
-        if accelerate and float(plane_angle(n_new, normal)) * 180.0 / math.pi > 50 * tol_angle:
-            dn, db = n_new - normal, b_new - offset
-            alpha = 2.0
-            while alpha <= 64.0:
-                n_try = normal + alpha * dn
-                scale = n_try.norm()
-                n_try, b_try = n_try / scale, (offset + alpha * db) / scale
-                d_try, j_try, m_try = evaluate(n_try, b_try)
-                if not bool(m_try < m_new):
-                    break
-                n_new, b_new, d_new, j_new, m_new = n_try, b_try, d_try, j_try, m_try
-                alpha *= 2.0
-        d_angle = float(plane_angle(n_new, normal)) * 180.0 / math.pi
-        d_off = float((b_new - offset).abs())
-        normal, offset, dist, nn_idx, med = n_new, b_new, d_new, j_new, m_new
-        if d_angle < tol_angle and d_off < tol_offset:
-            converged = True
-            break
-        # With outliers or noise the trimmed set can wander without settling: stop after
-        # `patience` steps that do not lower the median residual, keeping the best plane.
-        if bool(med < best[2]):
-            best, stalled = (normal, offset, med), 0
-        else:
-            stalled += 1
-            if stalled >= patience:
-                normal, offset, med = best
-                dist = None
-                break
-    return normal, offset, it, converged, med, dist, nn_idx
-
-
 def detect_reflection_plane(
     points: torch.Tensor,
     *,
@@ -437,7 +165,7 @@ def detect_reflection_plane(
             score always use every point.
         polish: run that final stage (else the subsample's fit is returned, with
             correspondences from the whole cloud).
-        accelerate: extrapolate steps while the median residual falls (see ``_refine``);
+        accelerate: extrapolate steps while the median residual falls (see :func:`alternate`);
             False is the thesis's plain alternation.
         pca_starts: also start from the three principal axes of the cloud.
         coarse: align every start by robust point-to-plane Gauss-Newton on the
@@ -507,7 +235,7 @@ def detect_reflection_plane(
     sub_index = KNNIndex(sub)
     sd, _ = sub_index.query(sub[: min(1000, sub.shape[0])], k=2)
     spacing = float(sd[:, 1].median())
-    cand, b_cand, order = _initial_normals(
+    cand, b_cand, order = initial_normals(
         sample, sub_index, init=init, n_directions=n_directions, grid_step=grid_step, beam=beam, spacing=spacing,
         dtype=dtype,
     )
@@ -530,22 +258,22 @@ def detect_reflection_plane(
 
     # Refine every start on the subsample; keep the one most points agree with.
     sub_tol = inlier_factor * spacing
-    sub_normals = _point_normals(sub, sub_index) if coarse else None
+    sub_normals = point_normals(sub, sub_index) if coarse else None
     align_q = sub[random_subset(sub.shape[0], 1000, gen)] if sub.shape[0] > 1000 else sub
     best = None
     iters = 0
     tried = 0
     for nk, bk in starts:
         if coarse:
-            nk, bk, it_k = _pre_align(
+            nk, bk, it_k = pre_align(
                 align_q, sub, sub_index, sub_normals, nk, bk, max_iter=coarse_iter, tol_angle=coarse_tol
             )
         else:
-            nk, bk, it_k, _, _, _, _ = _refine(
+            nk, bk, it_k, _, _, _, _ = alternate(
                 sub, sub_index, nk, bk, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
                 accelerate=accelerate,
             )
-        frac, med = _support(sub, sub_index, nk, bk, sub_tol)
+        frac, med = support(sub, sub_index, nk, bk, sub_tol)
         if best is None or (frac, -med) > (best[2], -best[3]):
             best = (nk, bk, frac, med)
             iters = it_k
@@ -565,7 +293,7 @@ def detect_reflection_plane(
             pol_index = KNNIndex(pol)
         else:
             pol, pol_index = xs, full_index
-        normal, offset, it2, converged, _, pdist, pnn = _refine(
+        normal, offset, it2, converged, _, pdist, pnn = alternate(
             pol, pol_index, normal, offset, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
             accelerate=accelerate,
         )

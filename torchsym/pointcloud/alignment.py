@@ -1,0 +1,182 @@
+"""The alternating steps of thesis Algorithm 6 and the point-to-plane pre-alignment.
+
+Every function works on points normalised to a unit bounding-box diagonal and returns
+planes as ``(normal (3,), offset ())``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+from torchsym.geometry.reflection import plane_angle, plane_from_pairs, plane_from_reflection, reflect_points
+from torchsym.matching.knn import KNNIndex, mutual_nearest
+
+__all__ = ["alternate", "point_normals", "pre_align", "support"]
+
+
+def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
+    """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
+    _, j = index.query(points, k=min(k, points.shape[0]))
+    nb = points[j]  # (N, k, 3)
+    nb = nb - nb.mean(1, keepdim=True)
+    _, vecs = torch.linalg.eigh(nb.transpose(1, 2) @ nb)
+    return vecs[:, :, 0]
+
+
+def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
+    """One Gauss-Newton step for the plane minimising ``sum w_i (nu_i . (reflect(x_i) - q_i))^2``.
+
+    The normal moves in its tangent plane (two parameters) and the offset freely. Weights
+    are Cauchy's, ``1 / (1 + (r / s)^2)`` with ``s`` 2.5 times the median absolute
+    residual, so outliers pull little; ``robust=False`` weighs all pairs 1.
+    """
+    dtype = x.dtype
+    helper = torch.tensor([1.0, 0.0, 0.0] if abs(float(normal[0])) < 0.9 else [0.0, 1.0, 0.0], dtype=dtype)
+    u = torch.linalg.cross(normal, helper)
+    u = u / u.norm()
+    basis = torch.stack([u, torch.linalg.cross(normal, u)], 1)  # (3, 2)
+    signed = x @ normal + offset  # (N,)
+    r = ((x - 2.0 * signed[:, None] * normal - q) * nu).sum(1)  # (N,)
+    nun = nu @ normal
+    jac = -2.0 * torch.cat([nun[:, None] * (x @ basis) + signed[:, None] * (nu @ basis), nun[:, None]], 1)  # (N, 3)
+    if robust:
+        s = 2.5 * r.abs().median().clamp_min(torch.finfo(dtype).eps)
+        w = 1.0 / (1.0 + (r / s) ** 2)
+    else:
+        w = torch.ones_like(r)
+    a = (jac * w[:, None]).T @ jac
+    g = (jac * w[:, None]).T @ r
+    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype), g[:, None]).solution[:, 0]
+    m = normal + basis @ step[:2]
+    norm = m.norm()
+    return m / norm, (offset + step[2]) / norm
+
+
+def pre_align(queries, targets, index, nu, normal, offset, *, max_iter: int, tol_angle: float):
+    """Point-to-plane Gauss-Newton from one start: mirror images of ``queries`` matched in
+    ``targets`` (normals ``nu``); returns ``(normal, offset, iterations)``."""
+    it = 0
+    for it in range(1, max_iter + 1):
+        _, j = index.query(reflect_points(queries, normal, offset))
+        n_new, b_new = point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
+        if float((n_new * normal).sum()) < 0:
+            n_new, b_new = -n_new, -b_new
+        moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
+        normal, offset = n_new, b_new
+        if moved < tol_angle:
+            break
+    return normal, offset, it
+
+
+def support(points, index, normal, offset, sigma: float):
+    """Soft share of points whose mirror image lands near the set: the mean of
+    ``exp(-d^2 / 2 sigma^2)`` over residuals ``d`` (a continuous inlier fraction), and the
+    median residual."""
+    d, _ = index.query(reflect_points(points, normal, offset))
+    return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
+
+
+def fit_pairs(points: torch.Tensor, nn_idx: torch.Tensor, keep: torch.Tensor, update: str, center: torch.Tensor):
+    """Refit the plane to the kept pairs ``(i, nn_idx[i])``."""
+    p = points[keep]
+    q = points[nn_idx[keep]]
+    if update == "reflection":
+        return plane_from_pairs(p, q)
+    # Thesis Algorithm 6, steps 9-12: S from the SVD of the cross-covariance about c,
+    # then c from (I - S) c = (I - S)(S p + q) / 2 averaged; the plane is read off S.
+    pc, qc = p - center, q - center
+    w = qc.T @ pc  # (3, 3)
+    u, _, vh = torch.linalg.svd(w)
+    s = u @ vh
+    if torch.det(s) > 0:  # closest orthogonal matrix with det -1
+        u = u.clone()
+        u[:, -1] = -u[:, -1]
+        s = u @ vh
+    n, _ = plane_from_reflection(s)
+    # The c-step: only n . c is determined, by the mean of (n . (S p) + n . q) / 2.
+    rhs = 0.5 * ((p @ s.T) + q).mean(0)
+    c = center + n * ((rhs - center) @ n)
+    return n, -(n * c).sum()
+
+
+def alternate(
+    points: torch.Tensor,
+    index: KNNIndex,
+    normal: torch.Tensor,
+    offset: torch.Tensor,
+    *,
+    update: str,
+    max_iter: int,
+    tol_angle: float,
+    tol_offset: float,
+    accelerate: bool,
+    patience: int = 5,
+):
+    """Algorithm 6 on ``points`` (queried against ``index`` over the same points).
+
+    Each step pairs every point with the nearest neighbour of its mirror image, keeps
+    the mutual pairs whose residual is at most the median (the truncated L2 loss of
+    Sec. 5.2.3), and refits the plane. Nearest-neighbour pairs slide along smooth
+    surfaces, so far from the optimum the plane creeps by a near-constant small angle
+    per step. With ``accelerate`` the step is extrapolated (x2, x4, ... as in Besl and
+    McKay's accelerated ICP) while the median residual keeps falling; a step is never
+    taken unless it lowers that residual.
+
+    It ends when the normal moves less than ``tol_angle`` degrees and the offset less than
+    ``tol_offset`` (converged), or after ``patience`` steps without a lower median
+    residual (not converged; the best plane seen is returned).
+
+    Returns ``(normal, offset, iterations, converged, median residual, residuals,
+    nearest indices)``; the last two are for the returned plane, or None.
+    """
+
+    def evaluate(n_: torch.Tensor, b_: torch.Tensor):
+        d_, j_ = index.query(reflect_points(points, n_, b_))
+        return d_, j_, d_.median()
+
+    converged = False
+    it = 0
+    dist, nn_idx, med = evaluate(normal, offset)
+    best = (normal, offset, med)
+    stalled = 0
+    for it in range(1, max_iter + 1):
+        mutual = mutual_nearest(nn_idx, nn_idx)  # same set both ways: free mutual test
+        keep = mutual & (dist <= med)
+        if int(keep.sum()) < 3:
+            keep = dist <= med
+        center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
+        n_new, b_new = fit_pairs(points, nn_idx, keep, update, center)
+        if float((n_new * normal).sum()) < 0:
+            n_new, b_new = -n_new, -b_new
+        d_new, j_new, m_new = evaluate(n_new, b_new)
+        if accelerate and float(plane_angle(n_new, normal)) * 180.0 / math.pi > 50 * tol_angle:
+            dn, db = n_new - normal, b_new - offset
+            alpha = 2.0
+            while alpha <= 64.0:
+                n_try = normal + alpha * dn
+                scale = n_try.norm()
+                n_try, b_try = n_try / scale, (offset + alpha * db) / scale
+                d_try, j_try, m_try = evaluate(n_try, b_try)
+                if not bool(m_try < m_new):
+                    break
+                n_new, b_new, d_new, j_new, m_new = n_try, b_try, d_try, j_try, m_try
+                alpha *= 2.0
+        d_angle = float(plane_angle(n_new, normal)) * 180.0 / math.pi
+        d_off = float((b_new - offset).abs())
+        normal, offset, dist, nn_idx, med = n_new, b_new, d_new, j_new, m_new
+        if d_angle < tol_angle and d_off < tol_offset:
+            converged = True
+            break
+        # With outliers or noise the trimmed set can wander without settling: stop after
+        # `patience` steps that do not lower the median residual, keeping the best plane.
+        if bool(med < best[2]):
+            best, stalled = (normal, offset, med), 0
+        else:
+            stalled += 1
+            if stalled >= patience:
+                normal, offset, med = best
+                dist = None
+                break
+    return normal, offset, it, converged, med, dist, nn_idx
