@@ -143,7 +143,10 @@ def alternate(
     stalled = 0
     for it in range(1, max_iter + 1):
         mutual = mutual_nearest(nn_idx, nn_idx)  # same set both ways: free mutual test
-        keep = mutual & (dist <= med)
+        # Trim at the median residual of the mutual pairs (thesis: of all pairs). Outliers
+        # are rarely mutual, so with many of them the median over all pairs is an
+        # outlier's residual and would keep outlier pairs in the fit.
+        keep = mutual & (dist <= dist[mutual].median()) if bool(mutual.any()) else dist <= med
         if int(keep.sum()) < 3:
             keep = dist <= med
         center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
