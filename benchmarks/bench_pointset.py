@@ -1,0 +1,373 @@
+"""Benchmark of PointSymm, reflection symmetry of d-dimensional point sets (thesis Ch. 7).
+
+Measures, on the seeded synthetic sets of :func:`torchsym.pointset.make_symmetric_pointset`
+(Sec. 7.4.2: ``n/2`` uniform points in the unit cube and their mirrors, then Gaussian noise
+of variance ``sigma^2``):
+
+1. the curves of Secs. 7.4.2-7.4.3 for ``d`` in {2, 3, 6, 8}: correspondence rate against the
+   distance threshold, precision against the angle threshold, and the errors ``e_d``, ``e_m``
+   next to their values for the true correspondences and plane;
+2. accuracy targets: 100 % correct correspondences and normal error < 0.01 deg without
+   noise for every ``d``; median normal error at ``sigma^2 = 0.01`` (``n = 300``, 3-D) against
+   an oracle plane fitted to the true correspondences (:func:`plane_from_pairs`);
+3. run time of the whole algorithm for ``n`` = 500 (thesis: 38.4 s in MATLAB), 2,000 and
+   10,000 points in 3-D;
+4. the (R, t) sub-problem of Sec. 7.2.2 (true correspondences, start 10 deg off) solved by
+   our :func:`torchsym.optim.trust_region` and by pymanopt's ``TrustRegions`` on the same
+   manifold ``SO(d)^(d-1) x R^d`` with the same cost, gradient and Hessian functions
+   (pymanopt's ``Product`` hands its ``SpecialOrthogonalGroup`` factors' tangent vectors to
+   the Euclidean Hessian in the Lie algebra, so the wrapper multiplies them by ``R`` first).
+
+The machine is shared with other jobs, so timings are noisy (medians of repeats are given).
+Writes ``benchmarks/results/pointset.md`` and ``pointset.json``.
+
+    python benchmarks/bench_pointset.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from torchsym.geometry import plane_from_pairs
+from torchsym.manifolds import Euclidean, ProductManifold, SpecialOrthogonal
+from torchsym.metrics.pointset import (
+    normal_angle_error,
+    pointset_correspondence_rate,
+    pointset_normal_precision,
+    pointset_symmetry_errors,
+)
+from torchsym.optim import trust_region
+from torchsym.pointset import make_symmetric_pointset, point_symm
+from torchsym.pointset import transform as tf
+
+HERE = Path(__file__).resolve().parent
+log = logging.getLogger("bench_pointset")
+TAU_D = [0.0, 0.01, 0.05, 0.1, 0.2, 0.34]
+TAU_THETA = [0.01, 0.5, 1.0, 2.0, 5.0]
+
+
+def planted(n, d, sigma2, seed):
+    return make_symmetric_pointset(n, d, sigma2, generator=torch.Generator().manual_seed(seed))
+
+
+def curves(dims, ns, sigmas, n_sets):
+    rows = []
+    for d in dims:
+        for s2 in sigmas:
+            rates, normals, truths, ed, em, ed_gt, em_gt, times = [], [], [], [], [], [], [], []
+            for n in ns:
+                for k in range(n_sets):
+                    s = planted(n, d, s2, seed=1000 * d + 10 * n + k)
+                    t0 = time.perf_counter()
+                    r = point_symm(s.points)
+                    times.append(time.perf_counter() - t0)
+                    rates.append(pointset_correspondence_rate(s.points, r.permutation, s.correspondence, TAU_D))
+                    normals.append(r.normal)
+                    truths.append(s.normal)
+                    a, b = pointset_symmetry_errors(s.points, r.permutation, r.normal, r.offset)
+                    ga, gb = pointset_symmetry_errors(s.points, s.correspondence, s.normal, s.offset)
+                    ed.append(float(a)), em.append(float(b)), ed_gt.append(float(ga)), em_gt.append(float(gb))
+            prec = pointset_normal_precision(torch.stack(normals), torch.stack(truths), TAU_THETA)
+            rows.append(
+                {
+                    "d": d,
+                    "sigma2": s2,
+                    "sets": len(normals),
+                    "corr_rate": torch.stack(rates).mean(0).tolist(),
+                    "precision": prec.tolist(),
+                    "median_normal_error_deg": float(normal_angle_error(torch.stack(normals), torch.stack(truths)).median()),
+                    "e_d": statistics.mean(ed),
+                    "e_d_true": statistics.mean(ed_gt),
+                    "e_m": statistics.mean(em),
+                    "e_m_true": statistics.mean(em_gt),
+                    "median_time_s": statistics.median(times),
+                }
+            )
+            log.info("curves d=%d sigma2=%.2f done", d, s2)
+    return rows
+
+
+def exact_target(dims, ns, n_sets):
+    worst_err, all_correct, count = 0.0, True, 0
+    for d in dims:
+        for n in ns:
+            for k in range(n_sets):
+                s = planted(n, d, 0.0, seed=77 + 100 * d + n + k)
+                r = point_symm(s.points)
+                worst_err = max(worst_err, float(normal_angle_error(r.normal, s.normal)))
+                all_correct &= bool(torch.equal(r.permutation, s.correspondence))
+                count += 1
+    return {"sets": count, "all_correspondences_correct": all_correct, "max_normal_error_deg": worst_err}
+
+
+def oracle_target(n_sets, sigma2=0.01, n=300, d=3):
+    ours, oracle = [], []
+    for k in range(n_sets):
+        s = planted(n, d, sigma2, seed=500 + k)
+        r = point_symm(s.points)
+        ours.append(float(normal_angle_error(r.normal, s.normal)))
+        nrm, _ = plane_from_pairs(s.points, s.points[s.correspondence])
+        oracle.append(float(normal_angle_error(nrm, s.normal)))
+    return {
+        "sets": n_sets,
+        "sigma2": sigma2,
+        "median_error_deg": statistics.median(ours),
+        "oracle_median_error_deg": statistics.median(oracle),
+        "ratio": statistics.median(ours) / statistics.median(oracle),
+    }
+
+
+def timing(ns, repeats):
+    out = []
+    for n in ns:
+        s = planted(n, 3, 0.0, seed=n)
+        point_symm(s.points[:50])  # warm-up
+        times, res = [], None
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            res = point_symm(s.points)
+            times.append(time.perf_counter() - t0)
+        out.append(
+            {
+                "n": n,
+                "median_time_s": statistics.median(times),
+                "assignment": res.assignment,
+                "iterations": res.iterations,
+                "normal_error_deg": float(normal_angle_error(res.normal, s.normal)),
+                "correct_correspondences": float((res.permutation == s.correspondence).double().mean()),
+            }
+        )
+        log.info("timing n=%d: %.3f s", n, out[-1]["median_time_s"])
+    return out
+
+
+def _subproblem(d, seed, n=500):
+    s = planted(n, d, 0.01, seed=seed)
+    x = s.points.double()
+    st = tf.pair_statistics(x, x[s.correspondence], torch.ones(n, dtype=torch.float64))
+    g = torch.Generator().manual_seed(seed + 12345)  # not the set's seed: its first draw is the normal
+    tilt = torch.randn(d, generator=g, dtype=torch.float64)
+    tilt = tilt - (tilt @ s.normal) * s.normal
+    start_normal = math.cos(math.radians(10)) * s.normal + math.sin(math.radians(10)) * tilt / tilt.norm()
+    point = -s.offset * s.normal + 0.05 * torch.randn(d, generator=g, dtype=torch.float64)
+    return st, (*tf.rotations_from_normal(start_normal), point)
+
+
+def _compare_once(d, seed, repeats):
+    """Time our trust region and pymanopt's on one (R, t) sub-problem; medians over repeats."""
+    import pymanopt
+    from pymanopt.manifolds import Euclidean as PEuclidean
+    from pymanopt.manifolds import Product as PProduct
+    from pymanopt.manifolds import SpecialOrthogonalGroup
+    from pymanopt.optimizers import TrustRegions
+
+    st, x0 = _subproblem(d, seed)
+    so_manifold = ProductManifold(*(SpecialOrthogonal(d) for _ in range(d - 1)), Euclidean(d))
+
+    def run_ours(manifold):
+        return trust_region(
+            manifold,
+            lambda v: tf.reflection_cost(v, st),
+            x0,
+            egrad=lambda v: tf.egrad(v, st),
+            ehess=lambda v, u: tf.ehess(v, u, st),
+            min_grad_norm=1e-6,
+        )
+
+    pm_manifold = PProduct([*(SpecialOrthogonalGroup(d) for _ in range(d - 1)), PEuclidean(d)])
+
+    def to_t(parts):
+        return tuple(torch.from_numpy(np.ascontiguousarray(p)) for p in parts)
+
+    @pymanopt.function.numpy(pm_manifold)
+    def pm_cost(*parts):
+        return float(tf.reflection_cost(to_t(parts), st))
+
+    @pymanopt.function.numpy(pm_manifold)
+    def pm_egrad(*parts):
+        return [g.numpy() for g in tf.egrad(to_t(parts), st)]
+
+    @pymanopt.function.numpy(pm_manifold)
+    def pm_ehess(*args):
+        # pymanopt's Product does not map its factors' tangent vectors to the ambient space
+        # (Product.embedding is the identity), so its SO(d) factors hand over the Lie-algebra
+        # element Omega; the Euclidean Hessian needs R Omega.
+        k = len(args) // 2
+        point, vec = args[:k], list(args[k:])
+        vec[: k - 1] = [r @ w for r, w in zip(point[: k - 1], vec[: k - 1])]
+        return [h.numpy() for h in tf.ehess(to_t(point), to_t(vec), st)]
+
+    problem = pymanopt.Problem(pm_manifold, pm_cost, euclidean_gradient=pm_egrad, euclidean_hessian=pm_ehess)
+    optimizer = TrustRegions(min_gradient_norm=1e-6, verbosity=0)
+    x0_np = [p.numpy().copy() for p in x0]
+    times = {"ours": [], "plane": [], "pm": []}
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r_ours = run_ours(so_manifold)
+        times["ours"].append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        r_plane = run_ours(tf.rotation_manifold(d))
+        times["plane"].append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        r_pm = optimizer.run(problem, initial_point=x0_np)
+        times["pm"].append(time.perf_counter() - t0)
+    gap = abs(r_ours.cost - float(r_pm.cost)) / max(1.0, abs(float(r_pm.cost)))
+    iters = {"ours": r_ours.iterations, "plane": r_plane.iterations, "pm": r_pm.iterations}
+    return times, iters, gap
+
+
+def tr_versus_pymanopt(dims, seeds, repeats):
+    rows = []
+    for d in dims:
+        t_all = {"ours": [], "plane": [], "pm": []}
+        it_all = {"ours": [], "plane": [], "pm": []}
+        gaps = []
+        for seed in seeds:
+            times, iters, gap = _compare_once(d, seed, repeats)
+            for key in t_all:
+                t_all[key] += times[key]
+                it_all[key].append(iters[key])
+            gaps.append(gap)
+        med_t = {k: statistics.median(v) for k, v in t_all.items()}
+        med_it = {k: statistics.median(v) for k, v in it_all.items()}
+        rows.append(
+            {
+                "d": d,
+                "instances": len(seeds),
+                "ours_so_d_median_time_s": med_t["ours"],
+                "ours_so_d_median_iterations": med_it["ours"],
+                "ours_so2d_median_time_s": med_t["plane"],
+                "ours_so2d_median_iterations": med_it["plane"],
+                "pymanopt_median_time_s": med_t["pm"],
+                "pymanopt_median_iterations": med_it["pm"],
+                "time_ratio_pymanopt_over_ours": med_t["pm"] / med_t["ours"],
+                "iteration_ratio_pymanopt_over_ours": med_it["pm"] / max(1, med_it["ours"]),
+                "max_relative_cost_gap": max(gaps),
+            }
+        )
+        log.info("TR vs pymanopt d=%d done", d)
+    return rows
+
+
+def to_markdown(res) -> str:
+    lines = ["# PointSymm benchmark (thesis Ch. 7)", ""]
+    lines.append(f"torch {torch.__version__}, {res['threads']} thread(s); shared machine, so timings are noisy.")
+    lines += ["", "## Targets", "", "| target | measured | met |", "|---|---|---|"]
+    for t in res["targets"]:
+        lines.append(f"| {t['target']} | {t['measured']} | {'yes' if t['met'] else 'no'} |")
+    lines += ["", "## Run time (3-D, noise-free)", "", "| n | median time (s) | assignment | alternations | normal error (deg) | correct corr. |", "|---|---|---|---|---|---|"]
+    for r in res["timing"]:
+        lines.append(
+            f"| {r['n']} | {r['median_time_s']:.3f} | {r['assignment']} | {r['iterations']} | {r['normal_error_deg']:.2e} | {r['correct_correspondences']:.3f} |"
+        )
+    lines += [
+        "",
+        "## (R, t) sub-problem: our trust region vs pymanopt's TrustRegions (n = 500, true P, start 10 deg off)",
+        "",
+        "| d | ours on SO(d)^(d-1) x R^d: time (s) / iters | ours on SO(2,d)^(d-1) x R^d: time (s) / iters | pymanopt: time (s) / iters | time ratio (pymanopt / ours) | iteration ratio | max rel. cost gap |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in res["tr_vs_pymanopt"]:
+        lines.append(
+            f"| {r['d']} | {r['ours_so_d_median_time_s']:.4f} / {r['ours_so_d_median_iterations']} | "
+            f"{r['ours_so2d_median_time_s']:.4f} / {r['ours_so2d_median_iterations']} | "
+            f"{r['pymanopt_median_time_s']:.4f} / {r['pymanopt_median_iterations']} | "
+            f"{r['time_ratio_pymanopt_over_ours']:.2f} | {r['iteration_ratio_pymanopt_over_ours']:.2f} | {r['max_relative_cost_gap']:.1e} |"
+        )
+    o = res["oracle"]
+    lines += [
+        "",
+        f"## Noise: sigma^2 = {o['sigma2']}, n = 300, 3-D ({o['sets']} sets)",
+        "",
+        (
+            f"median normal error {o['median_error_deg']:.3f} deg; oracle (plane fitted to the true correspondences) "
+            f"{o['oracle_median_error_deg']:.3f} deg; ratio {o['ratio']:.2f}."
+        ),
+        "",
+        "Smaller noise, same protocol:",
+        "",
+        "| sigma^2 | median normal error (deg) | oracle (deg) | ratio |",
+        "|---|---|---|---|",
+        *(
+            f"| {r['sigma2']} | {r['median_error_deg']:.3f} | {r['oracle_median_error_deg']:.3f} | {r['ratio']:.2f} |"
+            for r in res["oracle_smaller_noise"]
+        ),
+        "",
+        "## Curves (Secs. 7.4.2-7.4.3)",
+        "",
+        (
+            "Correspondence rate at distance thresholds " + ", ".join(map(str, TAU_D)) + "; precision at angle thresholds "
+            + ", ".join(f"{t} deg" for t in TAU_THETA) + "."
+        ),
+        "",
+        "| d | sigma^2 | sets | corr. rate | precision | median normal err (deg) | e_d (true) | e_m (true) | median time (s) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in res["curves"]:
+        cr = " ".join(f"{v:.2f}" for v in r["corr_rate"])
+        pr = " ".join(f"{v:.2f}" for v in r["precision"])
+        lines.append(
+            f"| {r['d']} | {r['sigma2']} | {r['sets']} | {cr} | {pr} | {r['median_normal_error_deg']:.3f} | "
+            f"{r['e_d']:.3f} ({r['e_d_true']:.3f}) | {r['e_m']:.3f} ({r['e_m_true']:.3f}) | {r['median_time_s']:.3f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer sets and repeats")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    # One thread: the work is many tiny tensor operations, for which a thread pool only adds
+    # synchronisation (and on a shared, oversubscribed machine, a lot of it).
+    torch.set_num_threads(1)
+    q = args.quick
+    res = {"threads": torch.get_num_threads()}
+    res["exact"] = exact_target([2, 3, 6, 8], [50, 150, 300], 2 if q else 4)
+    res["oracle"] = oracle_target(5 if q else 15)
+    res["oracle_smaller_noise"] = [oracle_target(5 if q else 15, sigma2=s2) for s2 in (1e-4, 1e-3)]
+    res["timing"] = timing([500, 2000, 10000], 1 if q else 3)
+    res["tr_vs_pymanopt"] = tr_versus_pymanopt([3, 6], list(range(3 if q else 6)), 1 if q else 3)
+    res["curves"] = curves([2, 3, 6, 8], [50, 150, 300], [0.0, 0.02, 0.06, 0.1], 1 if q else 3)
+    t = {r["n"]: r["median_time_s"] for r in res["timing"]}
+    e = res["exact"]
+    o = res["oracle"]
+    ratios = [r["time_ratio_pymanopt_over_ours"] for r in res["tr_vs_pymanopt"]]
+    res["targets"] = [
+        {
+            "target": "noise-free: 100% correct correspondences, normal error < 0.01 deg (d = 2, 3, 6, 8)",
+            "measured": f"{e['sets']} sets, all correct: {e['all_correspondences_correct']}, max error {e['max_normal_error_deg']:.1e} deg",
+            "met": e["all_correspondences_correct"] and e["max_normal_error_deg"] < 0.01,
+        },
+        {
+            "target": "sigma^2 = 0.01: median normal error <= 1.5x oracle",
+            "measured": f"{o['median_error_deg']:.2f} vs {o['oracle_median_error_deg']:.2f} deg (x{o['ratio']:.1f})",
+            "met": o["ratio"] <= 1.5,
+        },
+        {"target": "n = 500, 3-D <= 0.3 s (thesis 38.4 s)", "measured": f"{t[500]:.3f} s", "met": t[500] <= 0.3},
+        {"target": "n = 10,000, 3-D <= 10 s", "measured": f"{t[10000]:.2f} s", "met": t[10000] <= 10.0},
+        {
+            "target": "our TR no slower than pymanopt's",
+            "measured": "time ratio pymanopt/ours " + ", ".join(f"{v:.2f}" for v in ratios),
+            "met": min(ratios) >= 1.0,
+        },
+    ]
+    md = to_markdown(res)
+    print(md)
+    out = HERE / "results"
+    out.mkdir(exist_ok=True)
+    (out / "pointset.md").write_text(md)
+    (out / "pointset.json").write_text(json.dumps(res, indent=2))
+
+
+if __name__ == "__main__":
+    main()

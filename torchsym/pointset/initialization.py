@@ -1,0 +1,233 @@
+"""Randomised search for mirror pairs that starts PointSymm (thesis Sec. 7.2.4).
+
+Pick two points ``x_p, x_q`` at random. Every other point ``x_i`` proposes the plane ``pi_pi``
+that bisects ``(x_p, x_i)``; the pair ``(x_q, x_j)`` confirms it when its own bisecting plane
+``pi_qj`` has nearly the same normal, ``acos(|n_pi . n_qj|) <= eps_theta``, and ``x_q``, ``x_j``
+are nearly equally far from ``pi_pi``, ``min(d_q, d_j) / max(d_q, d_j) >= 1 - eps_d``. Both
+tests together say that ``x_j`` lies close to the reflection of ``x_q`` through ``pi_pi``, so
+instead of drawing the ``x_j`` one by one in random order (the thesis's sampling without
+replacement), we look up the few points nearest to that reflection in a k-d tree and test
+only those; the tests are the thesis's.
+
+What the thesis leaves open, and what we add so that the search survives mild noise:
+
+- which confirmed ``(i, j)`` a run keeps. Each candidate plane (the bisector of both pairs)
+  is verified on a fixed random subset of the points by the robust symmetry error
+  ``mean min(r^2, h^2)`` (``r`` the distance from a reflected point to the nearest input point,
+  ``h`` the median nearest-neighbour distance). The best-verified candidates are polished by
+  a few trimmed ICP steps on that subset (:func:`_polish`) and verified again.
+- noise. When it is comparable to the chord lengths times ``eps_theta``, no true pair passes
+  the tests, so every ``(i, j)`` is a candidate; a pair that passed is kept unless another
+  candidate verifies more than twice as well.
+
+Each run gives one polished plane; the robust median of the ``n_runs`` planes (and of their
+points) starts the alternation. On the synthetic sets of Sec. 7.4.2 (``n = 300``, 3-D) this
+start is good enough up to noise of standard deviation about 0.03 (``sigma^2 = 1e-3``); at
+``sigma^2 >= 3e-3`` single pairs no longer define usable planes and the start, hence the
+result, is usually wrong (see ``benchmarks/results/pointset.md``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["pair_search"]
+
+
+def _bisector(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit normals ``(a - b)/|a - b|``, offsets ``n . (a + b)/2`` and midpoints of pairs."""
+    diff = a - b
+    length = np.linalg.norm(diff, axis=-1, keepdims=True)
+    normal = diff / np.maximum(length, 1e-300)
+    mid = 0.5 * (a + b)
+    return normal, (normal * mid).sum(-1), mid
+
+
+def _verify(normals: np.ndarray, mids: np.ndarray, sample: np.ndarray, tree: cKDTree, h2: float, approx: float = 0.0) -> np.ndarray:
+    """Robust symmetry error ``mean min(r^2, h^2)`` of each candidate plane on ``sample``, ``(K,)``.
+
+    ``approx > 0`` allows nearest neighbours up to ``1 + approx`` times too far (faster).
+    """
+    signed = sample[None, :, :] @ normals[:, :, None] - (normals * mids).sum(-1)[:, None, None]  # (K, m, 1)
+    moved = sample[None] - 2.0 * signed * normals[:, None, :]  # (K, m, D)
+    dist, _ = tree.query(moved.reshape(-1, sample.shape[1]), k=1, eps=approx, distance_upper_bound=2.0 * math.sqrt(h2))
+    dist = np.minimum(dist, 2.0 * math.sqrt(h2))
+    return np.minimum(dist.reshape(len(normals), -1) ** 2, h2).mean(1)
+
+
+def _polish(normals, offsets, x, sample, tree, h2, steps):
+    """A few trimmed ICP steps on ``sample`` for each candidate plane ``(K, D)``, ``(K,)``.
+
+    Each step reflects the sample, takes every reflected point's nearest input point as its
+    mirror (pairs farther than ``2h`` apart are dropped) and refits the plane to the pairs in
+    closed form (the least-squares reflection of :func:`torchsym.geometry.plane_from_pairs`).
+    """
+    d = x.shape[1]
+    eye = np.eye(d)
+    for _ in range(steps):
+        signed = sample @ normals.T - offsets  # (m, K)
+        moved = sample[None] - 2.0 * signed.T[:, :, None] * normals[:, None, :]  # (K, m, D)
+        dist, idx = tree.query(moved.reshape(-1, d), k=1)
+        dist, idx = dist.reshape(len(normals), -1), idx.reshape(len(normals), -1)
+        w = (dist * dist <= 4.0 * h2).astype(float)  # (K, m)
+        y = x[idx]  # (K, m, D)
+        mid, chord = 0.5 * (sample[None] + y), sample[None] - y
+        wsum = w.sum(1)
+        mean = (w[..., None] * mid).sum(1) / np.maximum(wsum, 1e-300)[:, None]  # (K, D)
+        mc = (mid - mean[:, None]) * np.sqrt(w)[..., None]
+        wc = chord * np.sqrt(w)[..., None]
+        mat = mc.transpose(0, 2, 1) @ mc + 0.25 * ((wc * wc).sum((1, 2))[:, None, None] * eye - wc.transpose(0, 2, 1) @ wc)
+        new = np.linalg.eigh(mat)[1][..., 0]  # (K, D)
+        good = wsum > d
+        new = new * np.where((new * normals).sum(-1) < 0, -1.0, 1.0)[:, None]
+        normals = np.where(good[:, None], new, normals)
+        offsets = np.where(good, (normals * mean).sum(-1), offsets)
+    return normals, offsets
+
+
+def _one_run(x, p, q, tree, eps_theta, eps_d, n_look, sample, h2, max_candidates, rng, n_polish, polish_steps, polish_sample, n_screen=16, n_shortlist=128):
+    """One run of the search from ``x_p, x_q``: ``(error, normal, point, passed)`` or None."""
+    n = x.shape[0]
+    others = np.setdiff1d(np.arange(n), [p, q])
+    if others.size == 0:
+        return None
+    n_pi, c_pi, mid_pi = _bisector(x[p][None], x[others])  # (M, D), (M,), (M, D)
+    s_q = (n_pi * x[q]).sum(-1) - c_pi  # signed distance of x_q to each plane pi_pi
+    q_star = x[q] - 2.0 * s_q[:, None] * n_pi  # reflection of x_q through pi_pi
+    k = min(n_look, n)
+    gaps, js = tree.query(q_star, k=k)
+    js, gaps = js.reshape(len(others), k), gaps.reshape(len(others), k)
+    rows, cols, passed, miss = [], [], [], []
+    for col in range(k):
+        j = js[:, col]
+        valid = np.nonzero((j != p) & (j != q))[0]
+        n_qj, _, _ = _bisector(x[q][None], x[j[valid]])
+        angle = np.arccos(np.clip(np.abs((n_pi[valid] * n_qj).sum(-1)), 0.0, 1.0))
+        d_q = np.abs(s_q[valid])
+        d_j = np.abs((n_pi[valid] * x[j[valid]]).sum(-1) - c_pi[valid])
+        ratio = np.minimum(d_q, d_j) / np.maximum(np.maximum(d_q, d_j), 1e-300)
+        rows.append(valid)
+        cols.append(j[valid])
+        miss.append(gaps[valid, col])
+        passed.append((angle <= eps_theta) & (ratio >= 1.0 - eps_d))
+    rows_a, js_a, ok = np.concatenate(rows), np.concatenate(cols), np.concatenate(passed)
+    if rows_a.size > max_candidates:
+        # half: the pairs whose x_j lies closest to the reflection of x_q; half: drawn at
+        # random from the rest; and every pair that passed the tests
+        near = np.argsort(np.concatenate(miss), kind="stable")
+        rest = near[max_candidates // 2 :]
+        keep = np.concatenate([near[: max_candidates // 2], rng.choice(rest, size=min(rest.size, max_candidates // 2), replace=False)])
+        keep = np.union1d(keep, np.nonzero(ok)[0])
+        rows_a, js_a, ok = rows_a[keep], js_a[keep], ok[keep]
+    n_qj, _, mid_qj = _bisector(x[q][None], x[js_a])
+    sign = np.where((n_pi[rows_a] * n_qj).sum(-1) < 0, -1.0, 1.0)[:, None]
+    both = n_pi[rows_a] + sign * n_qj
+    both = both / np.maximum(np.linalg.norm(both, axis=-1, keepdims=True), 1e-300)
+    mids = 0.5 * (mid_pi[rows_a] + mid_qj)
+    # Two-stage verification: every candidate on the first points of the subset, the best
+    # ones (and those that passed the tests) on all of it.
+    score = _verify(both, mids, sample[:n_screen], tree, h2, approx=0.5)
+    if both.shape[0] > n_shortlist:
+        short = np.union1d(np.argsort(score, kind="stable")[:n_shortlist], np.nonzero(ok)[0])
+        score = np.full_like(score, np.inf)
+        score[short] = _verify(both[short], mids[short], sample, tree, h2)
+    else:
+        score = _verify(both, mids, sample, tree, h2)
+    order = np.argsort(score, kind="stable")[:n_polish]
+    if ok.any():
+        order = np.union1d(order, np.nonzero(ok)[0][np.argsort(score[ok], kind="stable")[:1]])
+    normals, offsets = _polish(both[order], (both[order] * mids[order]).sum(-1), x, polish_sample, tree, h2, polish_steps)
+    polished = _verify(normals, offsets[:, None] * normals, polish_sample, tree, h2)
+    a = int(np.argmin(polished))
+    if ok.any():
+        # Prefer the pair that passed the thesis's tests unless another verifies far better.
+        b = int(np.argmin(np.where(ok[order], polished, np.inf)))
+        if polished[b] <= 2.0 * polished[a]:
+            a = b
+    return float(polished[a]), normals[a], offsets[a] * normals[a], bool(ok.any())
+
+
+def pair_search(
+    x: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    n_runs: int = 10,
+    eps_theta: float = math.radians(2.0),
+    eps_d: float = 0.05,
+    n_look: int = 3,
+    n_verify: int = 64,
+    max_candidates: int = 1024,
+    n_polish: int = 8,
+    polish_steps: int = 4,
+    tree: cKDTree | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """Initial plane for PointSymm from ``n_runs`` randomised pair searches (Sec. 7.2.4).
+
+    Args:
+        x: ``(N, D)`` points.
+        rng: NumPy generator that draws ``x_p, x_q``.
+        n_runs: runs (each finds two candidate mirror pairs and gives one plane).
+        eps_theta: angle tolerance in radians.
+        eps_d: relative distance tolerance.
+        n_look: points near each reflected ``x_q`` that are tested.
+        n_verify: size of the random subset that verifies and polishes candidate planes.
+        max_candidates: most candidate pairs verified per run: half those whose ``x_j`` is
+            nearest to the reflection of ``x_q``, half drawn at random from the others (plus
+            every pair that passed the tests).
+        n_polish: best-verified candidates of each run that are polished by ICP steps.
+        polish_steps: ICP steps of the polish.
+        tree: a :class:`cKDTree` of ``x`` to reuse.
+
+    Returns:
+        ``normal (D,)`` unit and ``point (D,)`` on the plane: the robust median of the runs'
+        planes (the start of the alternation); ``normals (K, D)`` and ``points (K, D)`` the
+        runs' own planes; ``errors (K,)`` their robust symmetry errors on the verification
+        subset; and ``found``, the number of runs in which some pair passed the thesis's two
+        tests.
+    """
+    n = x.shape[0]
+    tree = cKDTree(x) if tree is None else tree
+    nn_dist, _ = tree.query(x, k=min(2, n))
+    spacing = float(np.median(nn_dist[:, -1])) if n > 1 else 1.0
+    h2 = max(spacing, 1e-12) ** 2
+    sample = x[np.sort(rng.choice(n, size=min(n, n_verify), replace=False))]
+    normals: list[np.ndarray] = []
+    mids: list[np.ndarray] = []
+    errors: list[float] = []
+    found = 0
+    for _ in range(n_runs):
+        p, q = (int(v) for v in rng.choice(n, size=2, replace=False))
+        got = _one_run(x, p, q, tree, eps_theta, eps_d, n_look, sample, h2, max_candidates, rng, n_polish, polish_steps, sample)
+        if got is None:  # only two points: the bisector of the pair
+            nrm_pq, _, mid_pq = _bisector(x[p][None], x[q][None])
+            normals.append(nrm_pq[0])
+            mids.append(mid_pq[0])
+            errors.append(0.0)
+            continue
+        errors.append(got[0])
+        normals.append(got[1])
+        mids.append(got[2])
+        found += int(got[3])
+    nrm = np.stack(normals)  # (K, D)
+    mid = np.stack(mids)  # (K, D)
+    # Median plane: the robust medoid normal (least total angle to the others, each angle
+    # capped at ``tol``, signs ignored), then the componentwise medians of the normals and
+    # midpoints that agree with it. A plain componentwise median is pulled away by the runs
+    # whose x_p has no mirror.
+    tol = max(2.0 * eps_theta, math.radians(5.0))
+    cross = np.clip(np.linalg.norm(nrm[:, None, :] - (nrm @ nrm.T)[:, :, None] * nrm[None], axis=-1), 0.0, 1.0)
+    angles = np.arcsin(cross)  # (K, K) accurate near 0, where arccos is not
+    medoid = nrm[int(np.argmin(np.minimum(angles, tol).sum(1)))]
+    agree = np.arcsin(np.clip(np.linalg.norm(nrm - (nrm @ medoid)[:, None] * medoid, axis=-1), 0.0, 1.0)) <= tol
+    nrm = nrm * np.where(nrm @ medoid < 0, -1.0, 1.0)[:, None]
+    normal = np.median(nrm[agree], axis=0)
+    norm = np.linalg.norm(normal)
+    normal = medoid if norm < 1e-12 else normal / norm
+    point = np.median(mid[agree], axis=0)
+    # The componentwise median of points on a plane need not lie on it: move it onto the
+    # plane whose offset is the median of the midpoints' offsets.
+    point = point - (point @ normal - np.median(mid[agree] @ normal)) * normal
+    return normal, point, nrm, mid, np.asarray(errors), found
