@@ -1,5 +1,56 @@
-"""Triangle meshes: the mesh type and (later) its operators and intrinsic symmetry."""
+"""Triangle meshes: the mesh type, its checks and operators, and intrinsic symmetry (thesis Ch. 6)."""
 
+from torchsym.mesh.correction import (
+    CorrectionResult,
+    correct_eigenfunctions,
+    correction_cost,
+)
+from torchsym.mesh.geodesic import geodesic_distances, shortest_paths, thin_points
+from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
+from torchsym.mesh.intrinsic import (
+    IntrinsicSymmetry,
+    IntrinsicSymmetryResult,
+    intrinsic_symmetry,
+    symmetry_colors,
+)
 from torchsym.mesh.mesh import Mesh
+from torchsym.mesh.operators import (
+    adjacency_matrix,
+    cotangent_laplacian,
+    edge_graph,
+    face_areas,
+    laplacian_eigen,
+    mass_matrix,
+    ring_neighbourhood,
+)
+from torchsym.mesh.pairs import eigenfunction_signs, pair_affinity, symmetric_pairs
+from torchsym.mesh.validate import ValidatedMesh, validate_mesh
 
-__all__ = ["Mesh"]
+__all__ = [
+    "CorrectionResult",
+    "IntrinsicSymmetry",
+    "IntrinsicSymmetryResult",
+    "Mesh",
+    "ValidatedMesh",
+    "adjacency_matrix",
+    "correct_eigenfunctions",
+    "correction_cost",
+    "cotangent_laplacian",
+    "edge_graph",
+    "eigenfunction_signs",
+    "face_areas",
+    "geodesic_distances",
+    "heat_kernel_signature",
+    "hks_feature_points",
+    "hks_times",
+    "intrinsic_symmetry",
+    "laplacian_eigen",
+    "mass_matrix",
+    "pair_affinity",
+    "ring_neighbourhood",
+    "shortest_paths",
+    "symmetric_pairs",
+    "symmetry_colors",
+    "thin_points",
+    "validate_mesh",
+]

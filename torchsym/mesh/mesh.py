@@ -43,7 +43,7 @@ class Mesh:
             )
 
     @classmethod
-    def create(cls, vertices: Any, faces: Any) -> "Mesh":
+    def create(cls, vertices: Any, faces: Any) -> Mesh:
         """Build a mesh from tensors, arrays or lists (faces converted to int64)."""
         v = as_tensor(vertices, "vertices")
         f = torch.as_tensor(faces) if not isinstance(faces, torch.Tensor) else faces
@@ -60,7 +60,7 @@ class Mesh:
     def num_faces(self) -> int:
         return int(self.faces.shape[0])
 
-    def to(self, device: torch.device | str) -> "Mesh":
+    def to(self, device: torch.device | str) -> Mesh:
         return Mesh(self.vertices.to(device), self.faces.to(device))
 
 

@@ -1,0 +1,162 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from torchsym.core.registry import SOLVERS
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.mesh import (
+    IntrinsicSymmetry,
+    IntrinsicSymmetryResult,
+    Mesh,
+    intrinsic_symmetry,
+)
+from torchsym.metrics.mesh import correspondence_rate
+
+
+@pytest.fixture(scope="module")
+def solved(blob):
+    mesh, gt = blob
+    return intrinsic_symmetry(mesh), mesh, gt
+
+
+class TestIntrinsicSymmetry:
+    def test_smoke(self, solved):
+        result, mesh, _ = solved
+        assert isinstance(result, IntrinsicSymmetryResult)
+        assert result.map.shape == (mesh.num_vertices,) and result.map.dtype == torch.int64
+        assert result.functional_map.shape == (13, 13) and result.rotation.shape == (13, 13)
+        assert result.pairs.shape[1] == 2 and result.pairs.shape[0] >= 1
+        assert {"eigen", "features", "pairs", "signs", "correction", "map", "total"} <= set(result.timings)
+        assert result.dropped_vertices == 0 and result.notes == ()
+
+    def test_exact_recovery(self, solved):
+        result, mesh, gt = solved
+        assert (result.map.numpy() == gt).mean() > 0.99
+        assert correspondence_rate(mesh, result.map, ground_truth=gt).rate == 1.0
+        r = result.rotation
+        torch.testing.assert_close(r.T @ r, torch.eye(13, dtype=r.dtype), atol=1e-8, rtol=0)
+
+    def test_rigid_motion(self, solved, rigid_motion):
+        result, mesh, _ = solved
+        rot, shift = rigid_motion
+        moved = Mesh(mesh.vertices @ torch.from_numpy(rot).T + torch.from_numpy(shift), mesh.faces)
+        again = intrinsic_symmetry(moved)
+        assert (again.map == result.map).float().mean() > 0.99
+
+    def test_vertex_permutation(self, solved):
+        result, mesh, gt = solved
+        perm = torch.from_numpy(np.random.default_rng(0).permutation(mesh.num_vertices))
+        inv = torch.argsort(perm)
+        permuted = Mesh(mesh.vertices[perm], inv[mesh.faces])
+        out = intrinsic_symmetry(permuted)
+        back = perm[out.map][inv]  # map in the original numbering
+        assert (back.numpy() == gt).mean() > 0.99
+
+    def test_seeded_determinism(self, blob):
+        mesh, _ = blob
+        a = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(5))
+        b = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(5))
+        assert torch.equal(a.map, b.map) and torch.equal(a.rotation, b.rotation)
+        assert torch.equal(a.functional_map, b.functional_map) and torch.equal(a.pairs, b.pairs)
+
+    def test_correction_off(self, blob):
+        mesh, gt = blob
+        out = intrinsic_symmetry(mesh, correct=False)
+        assert torch.equal(out.rotation, torch.eye(13, dtype=out.rotation.dtype))
+        assert (out.map.numpy() == gt).mean() > 0.95
+
+    def test_refine(self, blob):
+        mesh, gt = blob
+        out = intrinsic_symmetry(mesh, refine_iters=3)
+        assert "refine" in out.timings
+        assert (out.map.numpy() == gt).mean() > 0.99
+        with pytest.raises(InputValueError, match="refine_iters: expected an integer >= 0, got -1"):
+            intrinsic_symmetry(mesh, refine_iters=-1)
+
+    def test_dropped_component(self, blob):
+        mesh, gt = blob
+        n = mesh.num_vertices
+        extra_v = torch.tensor([[9.0, 9, 9], [10, 9, 9], [9, 10, 9]], dtype=mesh.vertices.dtype)
+        two = Mesh(torch.cat([mesh.vertices, extra_v]), torch.cat([mesh.faces, torch.tensor([[n, n + 1, n + 2]])]))
+        out = intrinsic_symmetry(two)
+        assert out.map.shape == (n + 3,) and out.map[n:].tolist() == [-1, -1, -1]
+        assert (out.map[:n].numpy() == gt).mean() > 0.99
+        assert out.dropped_vertices == 3 and "largest of 2 connected components" in out.notes[0]
+        with pytest.raises(InputValueError, match="expected one connected component, got 2"):
+            intrinsic_symmetry(two, components="refuse")
+
+    def test_exception(self, blob):
+        mesh, _ = blob
+        cloud = Mesh(mesh.vertices, torch.zeros((0, 3), dtype=torch.int64))
+        with pytest.raises(InputValueError, match=r"mesh.faces: expected at least one triangle.*point cloud"):
+            intrinsic_symmetry(cloud)
+        with pytest.raises(InputShapeError, match="mesh: expected a torchsym.mesh.Mesh, got Tensor"):
+            intrinsic_symmetry(mesh.vertices)  # type: ignore[arg-type]
+        tiny = Mesh.create([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        with pytest.raises(InputValueError, match="expected at least 14 vertices in the largest connected component, got 4"):
+            intrinsic_symmetry(tiny)
+        with pytest.raises(InputValueError, match="n_eigen: expected an integer >= 3, got 2"):
+            intrinsic_symmetry(mesh, n_eigen=2)
+        with pytest.raises(InputValueError, match="mu: expected a non-negative number"):
+            intrinsic_symmetry(mesh, mu=-1.0)
+
+
+class TestIntrinsicSymmetryModule:
+    def test_registered(self):
+        entry = SOLVERS.get("intrinsic_symmetry")
+        assert entry.cls is IntrinsicSymmetry and entry.kind == "mesh"
+        assert SOLVERS.default_for("mesh").name == "intrinsic_symmetry"
+        assert entry.defaults()["n_eigen"] == 13 and entry.defaults()["n_times"] == 50
+
+    def test_forward_matches_function(self, solved):
+        result, mesh, _ = solved
+        module = IntrinsicSymmetry(seed=0)
+        out = module(mesh)
+        assert torch.equal(out.map, result.map)
+        assert "n_eigen=13" in repr(module)
+
+    def test_exception(self):
+        with pytest.raises(InputValueError, match="correct: expected True or False, got 1"):
+            IntrinsicSymmetry(correct=1)  # type: ignore[arg-type]
+        with pytest.raises(InputValueError, match="components: expected 'largest' or 'refuse', got 'all'"):
+            IntrinsicSymmetry(components="all")
+
+    def test_config(self):
+        from pathlib import Path
+
+        from torchsym.core.config import build_pipeline, load_config
+
+        cfg = load_config(Path(__file__).resolve().parents[2] / "configs" / "mesh_intrinsic.yaml")
+        pipe = build_pipeline(cfg)
+        assert isinstance(pipe.steps[0], IntrinsicSymmetry)
+
+    def test_artifacts(self, solved, tmp_path):
+        result, mesh, _ = solved
+        paths = result.write_artifacts(mesh, tmp_path, "blob")
+        assert [p.name for p in paths] == ["blob_symmetry.ply", "blob_map.npy"]
+        assert np.array_equal(np.load(paths[1]), result.map.numpy())
+        assert paths[0].read_bytes().startswith(b"ply")
+        assert '"map"' in result.to_json()
+
+
+def test_real_mesh(shared_data):
+    from torchsym.io import read_mesh
+    from torchsym.mesh.synthetic import mirror_complete
+
+    mesh, gt = mirror_complete(read_mesh(shared_data / "meshes" / "elk.off", dtype=torch.float64))
+    out = intrinsic_symmetry(mesh)
+    assert correspondence_rate(mesh, out.map, ground_truth=gt).rate > 0.95
+
+
+def test_no_pairs_gives_identity(shared_data):
+    from torchsym.io import read_mesh
+
+    mesh = read_mesh(shared_data / "meshes" / "boeing.off")  # 122 components, largest without pairs
+    out = intrinsic_symmetry(mesh)
+    kept = torch.nonzero(out.map >= 0).ravel()
+    assert out.dropped_vertices > 0 and (out.map < 0).sum() == out.dropped_vertices
+    assert out.pairs.shape[0] == 0
+    assert torch.equal(out.map[kept], kept)
+    assert any("no symmetry found" in n for n in out.notes)

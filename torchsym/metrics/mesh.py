@@ -1,0 +1,127 @@
+"""Intrinsic-symmetry evaluation of Sec. 6.3.2 (after Kim et al. 2010).
+
+A predicted correspondence ``x -> y`` is correct when the geodesic distance from ``y`` to
+the ground-truth symmetric vertex of ``x`` is below ``sqrt(area / (20 pi))``. The
+correspondence rate of a mesh is the share of correct correspondences among the
+evaluated ones; the mesh rate of a data set is the share of meshes whose rate exceeds
+75 %. Geodesic distances are shortest paths along mesh edges (Dijkstra), which slightly
+over-estimate the surface distance, so rates are on the conservative side.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import torch
+
+from torchsym.core.results import Result
+from torchsym.errors import InputShapeError
+from torchsym.mesh.geodesic import geodesic_distances
+from torchsym.mesh.mesh import Mesh
+from torchsym.mesh.operators import edge_graph, face_areas
+
+__all__ = ["CorrespondenceScore", "correspondence_rate", "mesh_rate", "symmetry_threshold"]
+
+
+def _np(x: Any, dtype: Any) -> np.ndarray:
+    if isinstance(x, torch.Tensor):
+        x = x.detach().cpu().numpy()
+    return np.asarray(x, dtype=dtype)
+
+
+def symmetry_threshold(mesh: Mesh) -> float:
+    """``sqrt(area / (20 pi))``, the geodesic tolerance of a correct correspondence."""
+    v = _np(mesh.vertices, np.float64)
+    f = _np(mesh.faces, np.int64)
+    return math.sqrt(float(face_areas(v, f).sum()) / (20.0 * math.pi))
+
+
+@dataclasses.dataclass(frozen=True)
+class CorrespondenceScore(Result):
+    """Correspondence rate of one mesh (Sec. 6.3.2).
+
+    Attributes:
+        rate: share of evaluated correspondences that are correct, in [0, 1].
+        num_evaluated: correspondences evaluated (those with a ground truth and a prediction).
+        threshold: the geodesic tolerance used.
+        errors: ``(num_evaluated,)`` geodesic distance from each prediction to its ground
+            truth, ``inf`` beyond ``2 * threshold`` (not searched further).
+    """
+
+    rate: float
+    num_evaluated: int
+    threshold: float
+    errors: torch.Tensor
+
+
+def correspondence_rate(
+    mesh: Mesh,
+    predicted: Any,
+    *,
+    ground_truth: Any | None = None,
+    landmarks: Any | None = None,
+    threshold: float | None = None,
+) -> CorrespondenceScore:
+    """Correspondence rate of a predicted symmetric map on one mesh (Sec. 6.3.2).
+
+    Give the ground truth either densely or as landmark pairs:
+
+    - ``ground_truth (V,)``: symmetric vertex of every vertex, ``-1`` where unknown;
+    - ``landmarks (L, 2)``: rows ``(x, y)`` meaning ``y`` is the symmetric vertex of ``x``.
+
+    Args:
+        mesh: the mesh the map lives on.
+        predicted: ``(V,)`` int predicted symmetric vertex of every vertex (``-1``: none,
+            counted as wrong when a ground truth exists).
+        ground_truth: dense ground-truth map.
+        landmarks: ground-truth landmark pairs.
+        threshold: geodesic tolerance; ``sqrt(area / (20 pi))`` when None.
+
+    Returns:
+        A :class:`CorrespondenceScore`.
+    """
+    n = mesh.num_vertices
+    pred = _np(predicted, np.int64).ravel()
+    if pred.shape[0] != n:
+        raise InputShapeError(f"predicted: expected ({n},) to match the mesh's vertices, got {pred.shape}")
+    if (ground_truth is None) == (landmarks is None):
+        raise InputShapeError("ground_truth, landmarks: expected exactly one of them, got "
+                              f"{'both' if ground_truth is not None else 'neither'}")
+    if ground_truth is not None:
+        gt = _np(ground_truth, np.int64).ravel()
+        if gt.shape[0] != n:
+            raise InputShapeError(f"ground_truth: expected ({n},) to match the mesh's vertices, got {gt.shape}")
+        src = np.flatnonzero(gt >= 0)
+        dst = gt[src]
+    else:
+        lm = _np(landmarks, np.int64)
+        if lm.ndim != 2 or lm.shape[1] != 2:
+            raise InputShapeError(f"landmarks: expected (L, 2) vertex pairs, got {lm.shape}")
+        src, dst = lm[:, 0], lm[:, 1]
+    if src.size and (src.max() >= n or dst.max() >= n or src.min() < 0 or dst.min() < 0):
+        raise InputShapeError(f"ground truth: expected vertex indices in [0, {n - 1}]")
+    thr = symmetry_threshold(mesh) if threshold is None else float(threshold)
+    v = _np(mesh.vertices, np.float64)
+    f = _np(mesh.faces, np.int64)
+    graph = edge_graph(v, f)
+    guess = pred[src]  # (L,)
+    errors = np.full(src.shape[0], np.inf)  # (L,)
+    have = np.flatnonzero(guess >= 0)
+    if have.size:
+        starts, inv = np.unique(guess[have], return_inverse=True)
+        dist = geodesic_distances(graph, starts, limit=2.0 * thr)  # (S, V)
+        errors[have] = dist[inv, dst[have]]
+    rate = float((errors < thr).mean()) if errors.size else float("nan")
+    return CorrespondenceScore(rate=rate, num_evaluated=int(errors.size), threshold=thr, errors=torch.from_numpy(errors))
+
+
+def mesh_rate(rates: Sequence[float], *, minimum: float = 0.75) -> float:
+    """Share of meshes whose correspondence rate exceeds ``minimum`` (75 % in Sec. 6.3.2)."""
+    r = np.asarray(list(rates), dtype=np.float64)
+    if r.size == 0:
+        return float("nan")
+    return float((r > minimum).mean())
