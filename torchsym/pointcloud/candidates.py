@@ -22,8 +22,10 @@ def sphere_normals(count: int, *, dtype: torch.dtype = torch.float64) -> torch.T
     """``(count, 3)`` near-uniform unit normals on the upper half sphere (Fibonacci lattice).
 
     Every plane through the origin has exactly one normal with ``z >= 0``, so the half
-    sphere covers all planes; ``count = 200`` leaves no plane further than about
-    7 degrees from a sample, well inside the 10-degree basin of thesis Sec. 5.2.3.
+    sphere covers all planes. ``count = 100`` (as many as the thesis's 10 x 10 grid, but
+    evenly spread: the grid crowds its normals near the poles) leaves no plane much more
+    than 10 degrees from a sample, the basin of thesis Sec. 5.2.3; the beam search of
+    :func:`initial_normals` narrows from there.
     """
     i = torch.arange(count, dtype=dtype) + 0.5
     z = 1.0 - i / count  # uniform in (0, 1]
@@ -39,7 +41,13 @@ def grid_normals(step_deg: float, dtype: torch.dtype) -> torch.Tensor:
     return angles_to_normal(tx.reshape(-1), ty.reshape(-1))
 
 
-def score_normals(sample: torch.Tensor, index: KNNIndex, normals: torch.Tensor, sigmas: tuple[float, ...] | None):
+def score_normals(
+    sample: torch.Tensor,
+    index: KNNIndex,
+    normals: torch.Tensor,
+    sigmas: tuple[float, ...] | None,
+    coarse_index: KNNIndex | None = None,
+):
     """Offsets and costs of planes with the given normals through the sample's middle.
 
     Each plane passes through the median of the sample's projections on its normal: the
@@ -52,18 +60,23 @@ def score_normals(sample: torch.Tensor, index: KNNIndex, normals: torch.Tensor, 
     it, and smooth, so a plane a few degrees off still scores (the median residual, tried
     first, ranked the true basin badly on shapes with strong partial symmetries).
 
+    Searches stop at 4 sigma, where the kernel is below 1e-3. Kernels wider than the
+    first are evaluated against ``coarse_index`` when given (a sparser set: the wide
+    kernel does not need the density, and far searches in a small tree are cheap).
+
     Returns ``offsets (K,)`` and a list of ``(K,)`` costs, one per sigma.
     """
     offsets = -(sample @ normals.T).median(0).values  # (K,)
-    refl = reflect_points(sample.expand(normals.shape[0], -1, -1), normals, offsets)  # (K, n2, 3)
+    refl = reflect_points(sample.expand(normals.shape[0], -1, -1), normals, offsets).reshape(-1, 3)  # (K n2, 3)
     if sigmas is None:
-        dist, _ = index.query(refl.reshape(-1, 3))
+        dist, _ = index.query(refl)
         return offsets, [dist.reshape(normals.shape[0], -1).pow(2).sum(1).sqrt()]
-    # beyond 4 sigma the kernel is below 1e-3: no need to search that far
-    dist, _ = index.query(refl.reshape(-1, 3), max_distance=4.0 * max(sigmas))
-    dist = dist.reshape(normals.shape[0], -1)
-    d2 = dist.pow(2)
-    return offsets, [-torch.exp(-0.5 * d2 / (s * s)).mean(1) for s in sigmas]
+    costs = []
+    for i, s in enumerate(sigmas):
+        idx = coarse_index if (i > 0 and coarse_index is not None) else index
+        dist, _ = idx.query(refl, max_distance=4.0 * s)
+        costs.append(-torch.exp(-0.5 * dist.reshape(normals.shape[0], -1).pow(2) / (s * s)).mean(1))
+    return offsets, costs
 
 
 def initial_normals(
@@ -94,7 +107,9 @@ def initial_normals(
         offsets, (cost,) = score_normals(sample, index, normals, None)
         return normals, offsets, cost.argsort()
     normals = sphere_normals(n_directions).to(dtype)
-    offsets, (cost, wide) = score_normals(sample, index, normals, (2.0 * spacing, 8.0 * spacing))
+    offsets, (cost, wide) = score_normals(
+        sample, index, normals, (2.0 * spacing, 8.0 * spacing), coarse_index=KNNIndex(sample)
+    )
     wide_order = wide.argsort()
     radius = math.sqrt(2.0 * math.pi / n_directions) * 0.5  # half the lattice spacing, radians
     ring = torch.linspace(0, 2 * math.pi, 7, dtype=dtype)[:-1]
