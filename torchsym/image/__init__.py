@@ -1,3 +1,14 @@
 """Reflection symmetry in photographs (thesis Ch. 2-4)."""
 
-__all__: list[str] = []
+from torchsym.image.axes import ReflectionAxesBatch, ReflectionAxesResult
+from torchsym.image.boundary_cliques import BoundaryCliqueDetector, boundary_clique_axes
+from torchsym.image.ksymmetry import KSymmetryDetector, ksymmetry_axes
+
+__all__: list[str] = [
+    "BoundaryCliqueDetector",
+    "KSymmetryDetector",
+    "ReflectionAxesBatch",
+    "ReflectionAxesResult",
+    "boundary_clique_axes",
+    "ksymmetry_axes",
+]

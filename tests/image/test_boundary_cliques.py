@@ -1,0 +1,95 @@
+"""Boundary orientation + dominant cliques (thesis Sec. 2.3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from torchsym.errors import InputValueError
+from torchsym.image import (
+    BoundaryCliqueDetector,
+    ReflectionAxesBatch,
+    ReflectionAxesResult,
+    boundary_clique_axes,
+)
+from torchsym.image.boundary import boundary_curves, remove_junctions
+from torchsym.image.boundary_cliques import dominant_clique
+from torchsym.metrics.axes import match_axes
+
+
+class TestBoundaryCliqueAxes:
+    def test_smoke(self, single_objects):
+        img, _ = single_objects[0]
+        res = boundary_clique_axes(img)
+        assert isinstance(res, ReflectionAxesResult)
+        k = res.axes.shape[0]
+        assert res.axes.shape == (k, 4) and res.scores.shape == (k,) and res.lines.shape == (k, 3)
+        assert bool((res.scores[:-1] >= res.scores[1:]).all())
+        assert res.pair_axis.shape == (res.pairs.shape[0],)
+        assert bool((res.axes[:, [0, 2]] >= -1e-3).all() and (res.axes[:, [0, 2]] <= 239 + 1e-3).all())
+
+    def test_planted_axes_random_angles(self, single_objects):
+        """The planted axis is among the three best in at least 4 of 5 random angles."""
+        hits = 0
+        for img, gt in single_objects:
+            res = boundary_clique_axes(img)
+            hits += bool(match_axes(res.axes[:3], gt, image_size=(240, 240), criterion="challenge").any())
+        assert hits >= 4
+
+    def test_deterministic(self, single_objects):
+        img, _ = single_objects[2]
+        a = boundary_clique_axes(img, max_pairs=30, generator=torch.Generator().manual_seed(5))
+        b = boundary_clique_axes(img, max_pairs=30, generator=torch.Generator().manual_seed(5))
+        assert torch.equal(a.axes, b.axes) and torch.equal(a.pairs, b.pairs)
+
+    def test_canny_linking(self, single_objects):
+        img, _ = single_objects[3]
+        curves, tangent = boundary_curves(img[None], edges="canny")
+        assert curves and tangent.shape == (240, 240)
+        for c in curves:  # ordered chains: consecutive pixels are 8-neighbours
+            assert np.abs(np.diff(c, axis=0)).max() <= 1
+
+    def test_module_batch(self, single_objects):
+        img, _ = single_objects[4]
+        m = BoundaryCliqueDetector(max_axes=2)
+        out = m(torch.stack([img, img]))
+        assert isinstance(out, ReflectionAxesBatch) and len(out) == 2
+        assert torch.equal(out[0].axes, out[1].axes)
+        assert "max_axes=2" in repr(m)
+
+    def test_exception(self):
+        with pytest.raises(InputValueError, match="edges: expected 'canny' or 'edge_drawing', got 'sobel'"):
+            BoundaryCliqueDetector(edges="sobel")
+        with pytest.raises(InputValueError, match="theta: expected a positive number"):
+            boundary_clique_axes(torch.rand(3, 32, 32), theta=-1.0)
+
+
+class TestDominantClique:
+    def test_clique_plus_outliers(self):
+        adj = np.zeros((9, 9), dtype=bool)
+        big = [0, 2, 4, 6, 8]
+        for i in big:
+            for j in big:
+                adj[i, j] = i != j
+        adj[1, 3] = adj[3, 1] = True  # a smaller clique
+        clique, used_lp = dominant_clique(adj)
+        assert clique.tolist() == big and used_lp
+
+    def test_empty(self):
+        clique, _ = dominant_clique(np.zeros((4, 4), dtype=bool))
+        assert clique.size == 0
+
+
+class TestRemoveJunctions:
+    def test_cross_is_split(self):
+        e = np.zeros((21, 21), dtype=bool)
+        e[10, 2:19] = True
+        e[2:19, 10] = True
+        strength = np.ones((21, 21), np.float32)
+        out = remove_junctions(e, strength)
+        import cv2
+
+        count = cv2.filter2D(out.astype(np.float32), -1, np.ones((3, 3), np.float32), borderType=cv2.BORDER_CONSTANT)
+        assert int(((count > 3.5) & out).sum()) == 0  # nothing branches any more
+        assert out.sum() >= 28  # the four arms survive

@@ -1,0 +1,59 @@
+"""k-symmetry clustering (thesis Sec. 2.2)."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from torchsym.errors import InputValueError
+from torchsym.image import KSymmetryDetector, ksymmetry_axes
+from torchsym.image.ksymmetry import ksymmetry_clustering
+from torchsym.metrics.axes import match_axes
+
+
+def _mirror_pairs(normal, offset, n, generator):
+    normal = torch.tensor(normal, dtype=torch.float64)
+    normal = normal / normal.norm()
+    left = torch.rand(n, 2, generator=generator, dtype=torch.float64) * 2 - 1
+    right = left - 2 * ((left @ normal) + offset)[:, None] * normal
+    return left, right
+
+
+class TestKSymmetryClustering:
+    def test_two_planted_axes(self):
+        g = torch.Generator().manual_seed(0)
+        l1, r1 = _mirror_pairs([1.0, 0.2], 0.3, 40, g)
+        l2, r2 = _mirror_pairs([0.1, 1.0], -0.2, 40, g)
+        left, right = torch.cat([l1, l2]), torch.cat([r1, r2])
+        init = torch.tensor([[1.0, 0.0, 0.2], [0.0, 1.0, -0.1]], dtype=torch.float64)
+        u, labels, cost, converged, _ = ksymmetry_clustering(left, right, init)
+        assert converged and cost < 1e-12
+        assert labels[:40].unique().numel() == 1 and labels[40:].unique().numel() == 1
+        n = u[:, :2] / u[:, :2].norm(dim=1, keepdim=True)
+        want = torch.nn.functional.normalize(torch.tensor([[1.0, 0.2], [0.1, 1.0]], dtype=torch.float64), dim=1)
+        assert torch.allclose((n * want[labels[[0, 40]]]).sum(1).abs(), torch.ones(2, dtype=torch.float64), atol=1e-9)
+
+
+class TestKSymmetryAxes:
+    def test_smoke(self, single_objects):
+        img, _ = single_objects[0]
+        res = ksymmetry_axes(img)
+        assert res.method == "ksymmetry" and res.axes.shape[1] == 4
+        assert res.info["k1"] >= 1 and len(res.info["cost_curve"]) >= 1
+
+    def test_planted_axes_random_angles(self, single_objects):
+        hits = 0
+        for img, gt in single_objects:
+            res = ksymmetry_axes(img, num_features=400)
+            hits += bool(match_axes(res.axes[:3], gt, image_size=(240, 240), criterion="challenge").any())
+        assert hits >= 4
+
+    def test_module(self):
+        m = KSymmetryDetector(k1=2, max_axes=3)
+        assert "k1=2" in repr(m)
+
+    def test_exception(self):
+        with pytest.raises(InputValueError, match="eps_theta: expected a positive number"):
+            KSymmetryDetector(eps_theta=0.0)
+        with pytest.raises(InputValueError, match="k1: expected an integer >= 1"):
+            ksymmetry_axes(torch.rand(1, 32, 32), k1=0)

@@ -1,0 +1,25 @@
+"""Local features shared by several solvers: SIFT, mirrored SIFT, mirror pairs (thesis Sec. 2.2.1)."""
+
+from torchsym.features.mirror_pairs import (
+    choose_k1,
+    elbow_index,
+    mirror_distance_matrix,
+    mutual_knn_pairs,
+)
+from torchsym.features.sift import (
+    SiftFeatures,
+    detect_sift,
+    mirror_descriptors,
+    mirror_permutation,
+)
+
+__all__ = [
+    "SiftFeatures",
+    "choose_k1",
+    "detect_sift",
+    "elbow_index",
+    "mirror_descriptors",
+    "mirror_distance_matrix",
+    "mirror_permutation",
+    "mutual_knn_pairs",
+]

@@ -1,0 +1,130 @@
+"""SIFT keypoints and descriptors through kornia, and the mirrored SIFT descriptor.
+
+Thesis Sec. 2.2.1 follows Loy & Eklundh (2006): a keypoint ``p_i`` has its SIFT
+descriptor ``d_i`` and a *mirrored* descriptor ``m_i``, the descriptor of its patch flipped
+about the keypoint's orientation axis. For kornia's SIFT layout (``num_ang_bins = 8``
+orientation planes of ``4 x 4`` spatial cells, flattened as ``o * 16 + r * 4 + c``) the
+mirrored descriptor is an exact permutation of the 128 bins, see
+:func:`mirror_permutation`.
+
+Why it is a permutation: kornia samples the patch in the frame of the keypoint's local
+affine frame ``A = s R(theta)`` (patch column axis along the orientation). Mirroring the
+image horizontally maps ``A`` to ``diag(-1, 1) A = s R(pi - theta) diag(1, -1)``, so the
+keypoint of the mirrored image has orientation ``180 deg - theta`` and its patch is the
+original patch with its *rows* reversed (a flip about the orientation axis). Reversing
+the rows sends a gradient ``(g_x, g_y)`` to ``(g_x, -g_y)``, i.e. the gradient angle
+``phi`` to ``-phi``; kornia's orientation bins sit at ``o * 45 deg`` with linear
+interpolation between neighbours, so orientation plane ``o`` goes to ``(8 - o) mod 8``,
+and spatial row ``r`` to ``3 - r`` (the Gaussian weighting and the pooling kernel are
+symmetric). L2 normalisation, clipping and RootSIFT act bin-wise, so they commute with
+the permutation. ``tests/features/test_sift.py`` checks it against descriptors computed
+on the flipped image.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import kornia.feature as KF
+import torch
+
+from torchsym.core.checks import check_image, check_int
+from torchsym.core.results import Result
+from torchsym.errors import InputShapeError
+
+__all__ = ["SiftFeatures", "detect_sift", "mirror_descriptors", "mirror_permutation"]
+
+
+@dataclasses.dataclass(frozen=True)
+class SiftFeatures(Result):
+    """SIFT keypoints of one image.
+
+    Attributes:
+        lafs: ``(N, 2, 3)`` kornia local affine frames in input-image pixels.
+        points: ``(N, 2)`` keypoint centres ``(x, y)``, origin at the top-left pixel.
+        scales: ``(N,)`` keypoint scales in pixels.
+        orientations: ``(N,)`` orientations in radians (kornia's LAF convention).
+        responses: ``(N,)`` detector responses, all > 0.
+        descriptors: ``(N, 128)`` (Root)SIFT descriptors in kornia's layout.
+    """
+
+    lafs: torch.Tensor
+    points: torch.Tensor
+    scales: torch.Tensor
+    orientations: torch.Tensor
+    responses: torch.Tensor
+    descriptors: torch.Tensor
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+
+@functools.lru_cache(maxsize=4)
+def _sift_module(num_features: int) -> KF.SIFTFeature:
+    return KF.SIFTFeature(num_features=num_features, upright=False, rootsift=True).eval()
+
+
+def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeatures:
+    """Detect SIFT keypoints and describe them with kornia's ``SIFTFeature``.
+
+    Padded entries (response zero, which kornia returns when fewer than
+    ``num_features`` keypoints exist) are dropped. kornia describes ``num_features``
+    frames whatever it finds, so the budget is capped at one keypoint per 100 pixels, and
+    a constant image returns no keypoints without running the detector.
+
+    Args:
+        image: ``(C, H, W)`` or ``(1, C, H, W)`` float image in [0, 1], ``C`` in {1, 3}.
+        num_features: the most keypoints kept (strongest responses).
+
+    Returns:
+        :class:`SiftFeatures` in input-image pixels.
+
+    Example:
+        >>> feats = detect_sift(torch.rand(1, 64, 64), num_features=50)
+        >>> feats.descriptors.shape[1]
+        128
+    """
+    img = check_image(image, "image", min_size=16)
+    if img.shape[0] != 1:
+        raise InputShapeError(f"image: expected a single image (C, H, W) or (1, C, H, W), got batch {tuple(img.shape)}")
+    num_features = check_int(num_features, "num_features", minimum=1)
+    gray = img.float().mean(1, keepdim=True) if img.shape[1] == 3 else img.float()  # (1, 1, H, W)
+    budget = min(num_features, max(16, gray.shape[-1] * gray.shape[-2] // 100))
+    if float(gray.max() - gray.min()) < 1e-6:
+        lafs = torch.zeros(1, 0, 2, 3)
+        resp, desc = torch.zeros(1, 0), torch.zeros(1, 0, 128)
+    else:
+        with torch.no_grad():
+            lafs, resp, desc = _sift_module(budget)(gray)
+    keep = resp[0] > 0  # (N,)
+    lafs, resp, desc = lafs[0, keep], resp[0, keep], desc[0, keep]
+    scales = KF.get_laf_scale(lafs[None])[0, :, 0, 0]  # (N,)
+    ori = torch.deg2rad(KF.get_laf_orientation(lafs[None])[0, :, 0])  # (N,)
+    return SiftFeatures(lafs, lafs[:, :, 2].clone(), scales, ori, resp, desc)
+
+
+@functools.lru_cache(maxsize=8)
+def mirror_permutation(num_ang_bins: int = 8, num_spatial_bins: int = 4) -> torch.Tensor:
+    """Index permutation taking a kornia SIFT descriptor to its mirrored descriptor.
+
+    ``mirrored = descriptor[..., mirror_permutation()]`` is the descriptor of the patch
+    flipped about the keypoint's orientation axis (thesis Sec. 2.2.1, Loy & Eklundh): orientation
+    plane ``o -> (-o) mod num_ang_bins``, spatial row ``r -> num_spatial_bins - 1 - r``,
+    column unchanged. The permutation is an involution.
+
+    Returns:
+        ``(num_ang_bins * num_spatial_bins**2,)`` int64 indices.
+    """
+    o = torch.arange(num_ang_bins)
+    r = torch.arange(num_spatial_bins)
+    c = torch.arange(num_spatial_bins)
+    oo, rr, cc = torch.meshgrid((-o) % num_ang_bins, num_spatial_bins - 1 - r, c, indexing="ij")
+    return (oo * num_spatial_bins**2 + rr * num_spatial_bins + cc).reshape(-1)
+
+
+def mirror_descriptors(descriptors: torch.Tensor) -> torch.Tensor:
+    """Mirrored SIFT descriptors ``(..., 128)`` of ``(..., 128)`` kornia SIFT descriptors."""
+    if descriptors.dim() < 1 or descriptors.shape[-1] != 128:
+        raise InputShapeError(f"descriptors: expected (..., 128) kornia SIFT descriptors, got {tuple(descriptors.shape)}")
+    return descriptors[..., mirror_permutation().to(descriptors.device)]
