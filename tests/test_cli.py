@@ -20,8 +20,8 @@ class TestCLI:
     def test_detect_with_config_and_set(self, tmp_path):
         cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "pointcloud_plane.yaml"
         args = ["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_starts=2", "--no-figures"]
-        if cfg.is_file():
-            args += ["--config", str(cfg)]
+        assert cfg.is_file(), cfg
+        args += ["--config", str(cfg)]
         assert main(args) == 0
         record = json.loads((tmp_path / "chair.json").read_text())
         assert record["result"]["type"] == "ReflectionPlaneResult" and record["config"]["steps"][0]["params"]["n_starts"] == 2

@@ -6,8 +6,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
-import torch
 
+from torchsym.core.checks import as_tensor
 from torchsym.core.config import PipelineConfig, build_pipeline, default_config, load_config
 from torchsym.core.results import Result
 from torchsym.errors import ConfigError
@@ -31,7 +31,7 @@ def prepare(
     if isinstance(input, (str, Path)):
         found, data = load_input(input, kind=want)
     else:
-        data = torch.from_numpy(np.ascontiguousarray(input)) if isinstance(input, np.ndarray) else input
+        data = as_tensor(input, "input") if isinstance(input, np.ndarray) else input
         found = infer_kind(data)
     if cfg is None:
         cfg = default_config(kind or found)

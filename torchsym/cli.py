@@ -19,8 +19,6 @@ import yaml
 
 __all__ = ["main"]
 
-log = logging.getLogger("torchsym")
-
 _INPUTS_HELP = (
     "point clouds (.ply .obj .off .stl .xyz .txt .pts .npy), meshes (.off .obj .ply .stl with "
     "triangles), images (.png .jpg ...), or folders of them"
@@ -147,7 +145,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="torchsym",
         description="Reflection symmetry detection in point clouds, meshes, images and d-dimensional point sets.",
     )
-    p.add_argument("-v", "--verbose", action="store_true", help="log each stage")
+    p.add_argument("-v", "--verbose", action="store_true", help="log each stage of the solvers with its time")
     sub = p.add_subparsers(dest="command", required=True)
 
     d = sub.add_parser(

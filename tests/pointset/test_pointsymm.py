@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 import torch
@@ -183,6 +184,6 @@ class TestPointSymmModule:
             PointSymm(n_runs=0)
 
     def test_config_builds(self):
-        pipe = torchsym.build_pipeline("configs/pointset_pointsymm.yaml")
+        pipe = torchsym.build_pipeline(Path(__file__).resolve().parents[2] / "configs" / "pointset_pointsymm.yaml")
         res = pipe(planted(20, 3, 16).points)
         assert isinstance(res, PointSymmResult)

@@ -136,6 +136,8 @@ def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
         _check_params(entry, params, where)
         if i == 0 and entry.kind not in (kind, "any"):
             raise ConfigError(f"{where}: solver {name!r} takes {entry.kind!r} input, but the config's input is {kind!r}")
+        if i > 0 and entry.kind != "any":
+            raise ConfigError(f"{where}: solver {name!r} takes {entry.kind!r} input, not the previous step's result")
         steps.append(StepConfig(name, dict(params)))
     return PipelineConfig(kind, tuple(steps), str(raw.get("description", "")), source)
 

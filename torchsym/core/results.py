@@ -26,6 +26,8 @@ def to_jsonable(value: Any) -> Any:
         return value.to_dict()
     if isinstance(value, torch.Tensor):
         value = value.detach().cpu()
+        if value.dtype in (torch.float16, torch.bfloat16):
+            value = value.float()
         if value.dtype == torch.bool:
             return value.tolist()
         return to_jsonable(value.numpy())

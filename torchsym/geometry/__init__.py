@@ -2,11 +2,11 @@
 
 from torchsym.geometry.reflection import (
     angles_to_normal,
+    canonical_sign,
     normal_to_angles,
     plane_angle,
     plane_from_pairs,
     plane_from_reflection,
-    plane_to_plane_distance,
     point_plane_distance,
     reflect_points,
     reflection_matrix,
@@ -16,11 +16,11 @@ from torchsym.geometry.reflection import (
 
 __all__ = [
     "angles_to_normal",
+    "canonical_sign",
     "normal_to_angles",
     "plane_angle",
     "plane_from_pairs",
     "plane_from_reflection",
-    "plane_to_plane_distance",
     "point_plane_distance",
     "reflect_points",
     "reflection_matrix",

@@ -18,11 +18,11 @@ from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = [
     "angles_to_normal",
+    "canonical_sign",
     "normal_to_angles",
     "plane_angle",
     "plane_from_pairs",
     "plane_from_reflection",
-    "plane_to_plane_distance",
     "point_plane_distance",
     "reflect_points",
     "reflection_matrix",
@@ -61,6 +61,8 @@ def reflect_points(points: torch.Tensor, normal: torch.Tensor, offset: torch.Ten
         tensor([[-1.,  2.]])
     """
     _check_normal(normal)
+    if not isinstance(points, torch.Tensor) or points.dim() < 2:
+        raise InputShapeError(f"points: expected a (..., N, D) tensor, got {getattr(points, 'shape', type(points).__name__)}")
     if points.shape[-1] != normal.shape[-1]:
         raise InputShapeError(f"points: expected (..., N, {normal.shape[-1]}) to match normal, got {tuple(points.shape)}")
     offset = torch.as_tensor(offset, dtype=points.dtype, device=points.device)
@@ -108,7 +110,7 @@ def plane_from_reflection(matrix: torch.Tensor, point: torch.Tensor | None = Non
         raise InputShapeError(f"matrix: expected (..., D, D), got {tuple(matrix.shape)}")
     sym = 0.5 * (matrix + matrix.transpose(-1, -2))
     _, vecs = torch.linalg.eigh(sym)
-    n = _canonical_sign(vecs[..., :, 0])
+    n = canonical_sign(vecs[..., :, 0])
     if point is None:
         b = torch.zeros(n.shape[:-1], dtype=n.dtype, device=n.device)
     else:
@@ -116,7 +118,8 @@ def plane_from_reflection(matrix: torch.Tensor, point: torch.Tensor | None = Non
     return n, b
 
 
-def _canonical_sign(n: torch.Tensor, b: torch.Tensor | None = None):
+def canonical_sign(n: torch.Tensor, b: torch.Tensor | None = None):
+    """Flip ``normal (..., D)`` (and ``offset (...)``) so the largest-magnitude component is positive."""
     idx = n.abs().argmax(dim=-1, keepdim=True)
     sign = torch.sign(torch.gather(n, -1, idx)).squeeze(-1)
     sign = torch.where(sign == 0, torch.ones_like(sign), sign)
@@ -166,6 +169,10 @@ def plane_from_pairs(
         >>> n, b = plane_from_pairs(p, q); n.round(decimals=4), b.abs().round(decimals=4)
         (tensor([1., 0.]), tensor(0.))
     """
+    if not isinstance(points, torch.Tensor) or not isinstance(mirrors, torch.Tensor):
+        raise InputShapeError(
+            f"points, mirrors: expected (..., N, D) tensors, got {type(points).__name__} and {type(mirrors).__name__}"
+        )
     if points.shape != mirrors.shape or points.dim() < 2:
         raise InputShapeError(
             f"mirrors: expected the same (..., N, D) shape as points {tuple(points.shape)}, got {tuple(mirrors.shape)}"
@@ -204,7 +211,7 @@ def plane_from_pairs(
         n, b = pi[..., :d], pi[..., d]
         norm = n.norm(dim=-1).clamp_min(torch.finfo(points.dtype).tiny)
         n, b = n / norm.unsqueeze(-1), b / norm
-    return _canonical_sign(n, b)
+    return canonical_sign(n, b)
 
 
 def point_plane_distance(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor | float = 0.0) -> torch.Tensor:
@@ -222,6 +229,10 @@ def plane_angle(normal_a: torch.Tensor, normal_b: torch.Tensor, *, oriented: boo
     ``-n`` are the same plane); ``oriented=True`` gives the angle in ``[0, pi]``.
     Computed as ``atan2(|a - (a.b) b|, a.b)``, which stays accurate near 0, unlike ``acos``.
     """
+    _check_normal(normal_a)
+    _check_normal(normal_b)
+    if normal_a.shape[-1] != normal_b.shape[-1]:
+        raise InputShapeError(f"normal_b: expected (..., {normal_a.shape[-1]}) like normal_a, got {tuple(normal_b.shape)}")
     a, _ = _unit(normal_a)
     b, _ = _unit(normal_b)
     cos = (a * b).sum(-1)
@@ -231,19 +242,6 @@ def plane_angle(normal_a: torch.Tensor, normal_b: torch.Tensor, *, oriented: boo
         cos = cos * sign
     sin = (a - cos.unsqueeze(-1) * b).norm(dim=-1)
     return torch.atan2(sin, cos)
-
-
-def plane_to_plane_distance(
-    normal_a: torch.Tensor, offset_a: torch.Tensor, normal_b: torch.Tensor, offset_b: torch.Tensor, center: torch.Tensor
-) -> torch.Tensor:
-    """Distance from the projection of ``center`` onto plane a to plane b, ``(...)``.
-
-    This is the distance term of the evaluation protocol (thesis Sec. 5.2.4) with
-    ``center`` the centre of the object's bounding box.
-    """
-    na, ba = _unit(normal_a, offset_a)
-    foot = center - ((center * na).sum(-1) + ba).unsqueeze(-1) * na
-    return point_plane_distance(foot.unsqueeze(-2), normal_b, offset_b).squeeze(-1).abs()
 
 
 def _rot_x(t: torch.Tensor) -> torch.Tensor:

@@ -178,6 +178,8 @@ def load_input(path: str | Path, kind: str | None = None) -> tuple[str, Any]:
     if suffix in POINT_SUFFIXES:
         pts = read_pointcloud(p)
         found = "pointcloud" if pts.shape[1] == 3 else "points"
+        if kind not in (None, found) and not (kind == "points" and found == "pointcloud"):
+            raise InputFileError(f"input: {str(p)!r} holds a {found}, but kind {kind!r} was asked for")
         return (kind or found), pts
     known = ", ".join(IMAGE_SUFFIXES + POINT_SUFFIXES)
     raise InputFileError(f"input: cannot tell what {str(p)!r} holds from its suffix; expected one of {known}")

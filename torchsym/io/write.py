@@ -10,6 +10,7 @@ import numpy as np
 import torch
 
 from torchsym.core.results import to_jsonable
+from torchsym.errors import InputFileError
 
 __all__ = ["write_image", "write_json", "write_ply"]
 
@@ -93,5 +94,5 @@ def write_image(path: str | Path, image: Any) -> Path:
     if img.ndim == 3 and img.shape[2] == 3:
         img = img[:, :, ::-1]
     if not cv2.imwrite(str(p), np.ascontiguousarray(img)):
-        raise OSError(f"path: cannot write an image to {str(p)!r}")
+        raise InputFileError(f"path: cannot write an image to {str(p)!r}")
     return p

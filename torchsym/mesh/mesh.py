@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+import numpy as np
 import torch
 
 from torchsym.core.checks import as_tensor, check_finite
@@ -46,7 +47,15 @@ class Mesh:
     def create(cls, vertices: Any, faces: Any) -> Mesh:
         """Build a mesh from tensors, arrays or lists (faces converted to int64)."""
         v = as_tensor(vertices, "vertices")
-        f = torch.as_tensor(faces) if not isinstance(faces, torch.Tensor) else faces
+        if isinstance(faces, torch.Tensor):
+            f = faces
+        else:
+            try:
+                f = torch.as_tensor(np.asarray(faces))
+            except (TypeError, ValueError) as exc:
+                raise InputShapeError(f"faces: expected (F, 3) integer vertex indices, got {type(faces).__name__} ({exc})") from None
+        if not (f.is_floating_point() or f.dtype in (torch.int8, torch.int16, torch.int32, torch.int64, torch.uint8)):
+            raise InputShapeError(f"faces: expected (F, 3) integer vertex indices, got dtype {f.dtype}")
         if f.is_floating_point():
             if f.numel() and not bool((f == f.round()).all()):
                 raise InputShapeError("faces: expected integer vertex indices, got non-integer values")

@@ -49,6 +49,8 @@ def _truncated_cg(problem: Problem, grad: Any, delta: float, kappa: float, theta
     stop = _MAX_INNER
     j = 0
     for j in range(1, max_inner + 1):
+        if d_pd == 0:  # zero gradient: the zero step is the model's minimiser
+            break
         hdelta = problem.hess(mdelta)
         d_hd = problem.inner(mdelta, hdelta)
         alpha = z_r / d_hd if d_hd != 0 else math.inf

@@ -20,11 +20,15 @@ Two changes make it more accurate and faster; both are switchable and measured i
 * **Several starts, on a sphere of normals, scored robustly.** Algorithm 5 keeps the one
   best cell of a 10 x 10 grid of ``(theta_x, theta_y)`` in 20-degree steps, scored by the
   Frobenius residual. On real shapes (chairs, cups, aircraft) the best coarse cell often
-  lies in the basin of a wrong local minimum, and a single outlier-laden residual ranks
-  cells badly. We score a near-uniform set of normals on the half sphere by the median
-  residual, refine the ``n_starts`` best well-separated ones on a subsample, and keep the
-  fit with the lowest trimmed residual; the best is then polished on the whole cloud.
-  ``init="grid"`` with ``n_starts=1`` is the thesis's Algorithm 5.
+  lies in the basin of a wrong local minimum, and a few outliers rank cells badly. We
+  score 100 near-uniform normals with bounded Welsch kernels of the residuals, narrow the
+  best by a beam search, add the cloud's principal axes (for an exactly symmetric set the
+  normal is one of them), align each start by robust point-to-plane Gauss-Newton on a
+  subsample, and keep the one with the highest soft share of points that find a mirror.
+  The winner is then run through Algorithm 6 on the whole cloud (mutual pairs, trimmed
+  at the median residual of the mutual pairs, extrapolated steps, the thesis's
+  tolerances). ``configs/pointcloud_plane_thesis.yaml`` turns these changes off as far as
+  they are switchable (see the settings below).
 
 Nearest neighbours use scipy's cKDTree on the CPU and chunked ``cdist`` elsewhere
 (:class:`torchsym.matching.KNNIndex`).
@@ -33,6 +37,7 @@ Nearest neighbours use scipy's cKDTree on the CPU and chunked ``cdist`` elsewher
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import time
 from pathlib import Path
@@ -46,10 +51,18 @@ from torchsym.core.random import make_generator, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result
 from torchsym.errors import InputValueError
-from torchsym.geometry.reflection import plane_angle, reflect_points, reflection_matrix, reflection_transform
+from torchsym.geometry.reflection import (
+    canonical_sign,
+    plane_angle,
+    reflect_points,
+    reflection_matrix,
+    reflection_transform,
+)
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 from torchsym.pointcloud.alignment import alternate, point_normals, pre_align, support
 from torchsym.pointcloud.candidates import initial_normals, sphere_normals
+
+log = logging.getLogger(__name__)
 
 __all__ = ["ReflectionPlaneDetector", "ReflectionPlaneResult", "detect_reflection_plane", "sphere_normals"]
 
@@ -110,6 +123,35 @@ class ReflectionPlaneResult(Result):
             reflection_plane_ply(data, self, out_dir / f"{stem}_plane.ply"),
             plot_reflection_plane(data, self, out_dir / f"{stem}_plane.png"),
         ]
+
+
+def _check_settings(**s: Any) -> dict[str, Any]:
+    """Validate the detector's settings once, for the function and the module alike."""
+    out = dict(s)
+    for name in ("n_init_samples", "n_refine_samples", "n_polish_samples"):
+        out[name] = check_int(s[name], name, minimum=4)
+    for name in ("n_directions", "n_starts", "beam", "max_iter", "coarse_iter"):
+        out[name] = check_int(s[name], name, minimum=1)
+    out["grid_step"] = check_positive(s["grid_step"], "grid_step")
+    out["inlier_factor"] = check_positive(s["inlier_factor"], "inlier_factor")
+    for name in ("tol_angle", "tol_offset", "coarse_tol", "min_start_separation"):
+        out[name] = check_positive(s[name], name, allow_zero=True)
+    out["accept"] = check_in_range(s["accept"], "accept", 0.0, 1.0)
+    if s["init"] not in ("sphere", "grid"):
+        raise InputValueError(f"init: expected 'sphere' or 'grid', got {s['init']!r}")
+    if s["update"] not in ("reflection", "procrustes"):
+        raise InputValueError(f"update: expected 'reflection' or 'procrustes', got {s['update']!r}")
+    for name in ("polish", "accelerate", "pca_starts", "coarse"):
+        if not isinstance(s[name], bool):
+            raise InputValueError(f"{name}: expected True or False, got {s[name]!r}")
+    return out
+
+
+def _median_spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator) -> float:
+    """Median distance from a point to its nearest other point, on up to 1,000 random points."""
+    probe = points[random_subset(points.shape[0], 1000, gen)]
+    d, _ = index.query(probe, k=2)
+    return float(d[:, 1].median())
 
 
 def detect_reflection_plane(
@@ -195,22 +237,15 @@ def detect_reflection_plane(
     """
     t0 = time.perf_counter()
     pts = check_points(points, "points", dim=3, min_points=4)
-    n_init_samples = check_int(n_init_samples, "n_init_samples", minimum=4)
-    n_directions = check_int(n_directions, "n_directions", minimum=1)
-    n_starts = check_int(n_starts, "n_starts", minimum=1)
-    beam = check_int(beam, "beam", minimum=1)
-    n_refine_samples = check_int(n_refine_samples, "n_refine_samples", minimum=4)
-    n_polish_samples = check_int(n_polish_samples, "n_polish_samples", minimum=4)
-    max_iter = check_int(max_iter, "max_iter", minimum=1)
-    check_positive(grid_step, "grid_step")
-    check_positive(tol_angle, "tol_angle", allow_zero=True)
-    check_positive(tol_offset, "tol_offset", allow_zero=True)
-    check_positive(inlier_factor, "inlier_factor")
-    check_positive(min_start_separation, "min_start_separation", allow_zero=True)
-    if init not in ("sphere", "grid"):
-        raise InputValueError(f"init: expected 'sphere' or 'grid', got {init!r}")
-    if update not in ("reflection", "procrustes"):
-        raise InputValueError(f"update: expected 'reflection' or 'procrustes', got {update!r}")
+    if not pts.is_floating_point() or pts.dtype in (torch.float16, torch.bfloat16):
+        pts = pts.to(torch.float32)
+    _check_settings(
+        n_init_samples=n_init_samples, init=init, n_directions=n_directions, grid_step=grid_step, n_starts=n_starts,
+        beam=beam, min_start_separation=min_start_separation, n_refine_samples=n_refine_samples,
+        n_polish_samples=n_polish_samples, update=update, max_iter=max_iter, tol_angle=tol_angle,
+        tol_offset=tol_offset, polish=polish, accelerate=accelerate, pca_starts=pca_starts, coarse=coarse,
+        coarse_tol=coarse_tol, coarse_iter=coarse_iter, accept=accept, inlier_factor=inlier_factor,
+    )
     gen = make_generator(generator)
     # float64 inside: float32 BLAS reductions can differ in the last bit between calls
     # (their blocking depends on memory alignment), which would break same-seed-same-bits.
@@ -224,7 +259,9 @@ def detect_reflection_plane(
     centered = x - x.mean(0)
     sv = torch.linalg.svdvals(centered.double())
     # the second singular value is at rounding level of the coordinates: one line
-    if scale == 0 or float(sv[1]) <= 1e3 * torch.finfo(pts.dtype).eps * float(sv[0]):
+    if scale == 0:
+        raise InputValueError(f"points: expected a cloud spanning at least a plane, got {n} copies of one point")
+    if float(sv[1]) <= 1e3 * torch.finfo(pts.dtype).eps * float(sv[0]):
         raise InputValueError(f"points: expected a cloud spanning at least a plane, got {n} points on one line")
     origin = x.median(0).values
     xs = (x - origin) / scale  # (N, 3), diagonal 1
@@ -233,8 +270,7 @@ def detect_reflection_plane(
     sample = xs[random_subset(n, n_init_samples, gen)]  # (n2, 3)
     sub = xs[random_subset(n, n_refine_samples, gen)] if n > n_refine_samples else xs
     sub_index = KNNIndex(sub)
-    sd, _ = sub_index.query(sub[: min(1000, sub.shape[0])], k=2)
-    spacing = float(sd[:, 1].median())
+    spacing = _median_spacing(sub, sub_index, gen)
     cand, b_cand, order = initial_normals(
         sample, sub_index, init=init, n_directions=n_directions, grid_step=grid_step, beam=beam, spacing=spacing,
         dtype=dtype,
@@ -303,10 +339,7 @@ def detect_reflection_plane(
     if final is None:
         final = full_index.query(reflect_points(xs, normal, offset))
     dist, nn_idx = final
-    spacing_q = xs[random_subset(n, 1000, gen)]
-    sd, _ = full_index.query(spacing_q, k=2)
-    spacing = float(sd[:, 1].median())
-    tol = inlier_factor * max(spacing, 1e-12)
+    tol = inlier_factor * max(_median_spacing(xs, full_index, gen), 1e-12)
     inliers = dist <= tol
     mutual = mutual_nearest(nn_idx, nn_idx)
     idx = torch.arange(n)
@@ -318,6 +351,12 @@ def detect_reflection_plane(
     center_s = center_s - ((center_s @ normal) + offset) * normal  # project onto the plane
     t_end = time.perf_counter()
 
+    log.info(
+        "reflection plane: %d points, %d starts, %d steps, converged %s, init %.3f s, refine %.3f s, polish %.3f s",
+        n, tried, iters, converged, t_init - t0, t_refine - t_init, t_end - t_refine,
+    )
+    # One sign for every plane: the largest-magnitude component of the normal positive.
+    normal, offset = canonical_sign(normal, offset)
     # Undo the normalisation: x = scale * xs + origin.
     out_dtype = pts.dtype
     normal_o = normal.to(out_dtype)
@@ -381,33 +420,13 @@ class ReflectionPlaneDetector(nn.Module):
         seed: int = 0,
     ) -> None:
         super().__init__()
-        self.settings = dict(
-            n_init_samples=check_int(n_init_samples, "n_init_samples", minimum=4),
-            init=init,
-            n_directions=check_int(n_directions, "n_directions", minimum=1),
-            grid_step=check_positive(grid_step, "grid_step"),
-            n_starts=check_int(n_starts, "n_starts", minimum=1),
-            beam=check_int(beam, "beam", minimum=1),
-            min_start_separation=check_positive(min_start_separation, "min_start_separation", allow_zero=True),
-            n_refine_samples=check_int(n_refine_samples, "n_refine_samples", minimum=4),
-            n_polish_samples=check_int(n_polish_samples, "n_polish_samples", minimum=4),
-            update=update,
-            max_iter=check_int(max_iter, "max_iter", minimum=1),
-            tol_angle=check_positive(tol_angle, "tol_angle", allow_zero=True),
-            tol_offset=check_positive(tol_offset, "tol_offset", allow_zero=True),
-            polish=bool(polish),
-            accelerate=bool(accelerate),
-            pca_starts=bool(pca_starts),
-            coarse=bool(coarse),
-            coarse_tol=check_positive(coarse_tol, "coarse_tol", allow_zero=True),
-            coarse_iter=check_int(coarse_iter, "coarse_iter", minimum=1),
-            accept=check_in_range(accept, "accept", 0.0, 1.0),
-            inlier_factor=check_positive(inlier_factor, "inlier_factor"),
+        self.settings = _check_settings(
+            n_init_samples=n_init_samples, init=init, n_directions=n_directions, grid_step=grid_step,
+            n_starts=n_starts, beam=beam, min_start_separation=min_start_separation,
+            n_refine_samples=n_refine_samples, n_polish_samples=n_polish_samples, update=update, max_iter=max_iter,
+            tol_angle=tol_angle, tol_offset=tol_offset, polish=polish, accelerate=accelerate, pca_starts=pca_starts,
+            coarse=coarse, coarse_tol=coarse_tol, coarse_iter=coarse_iter, accept=accept, inlier_factor=inlier_factor,
         )
-        if init not in ("sphere", "grid"):
-            raise InputValueError(f"init: expected 'sphere' or 'grid', got {init!r}")
-        if update not in ("reflection", "procrustes"):
-            raise InputValueError(f"update: expected 'reflection' or 'procrustes', got {update!r}")
         self.seed = check_int(seed, "seed", minimum=0)
 
     def forward(self, points: torch.Tensor, generator: torch.Generator | None = None) -> ReflectionPlaneResult:

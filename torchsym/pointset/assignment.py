@@ -29,6 +29,8 @@ from scipy.sparse.csgraph import min_weight_full_bipartite_matching
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
+from torchsym.errors import InputValueError
+
 __all__ = ["mirror_assignment"]
 
 
@@ -86,7 +88,7 @@ def mirror_assignment(
         real = c < n
         perm[r[real]] = c[real]
     else:
-        raise ValueError(f"method: expected 'exact' or 'sparse', got {method!r}")
+        raise InputValueError(f"method: expected 'exact' or 'sparse', got {method!r}")
     dist2 = np.full(n, np.inf)
     ok = perm >= 0
     dist2[ok] = ((reflected[ok] - points[perm[ok]]) ** 2).sum(1)
