@@ -64,6 +64,9 @@ from torchsym.pointcloud.candidates import initial_normals, sphere_normals
 
 log = logging.getLogger(__name__)
 
+#: quantile of nearest-neighbour distances that sets the kernel widths of the search
+SPACING_QUANTILE = 0.1
+
 __all__ = ["ReflectionPlaneDetector", "ReflectionPlaneResult", "detect_reflection_plane", "sphere_normals"]
 
 
@@ -147,11 +150,13 @@ def _check_settings(**s: Any) -> dict[str, Any]:
     return out
 
 
-def _median_spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator) -> float:
-    """Median distance from a point to its nearest other point, on up to 1,000 random points."""
+def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float = 0.5) -> float:
+    """Quantile ``q`` of the distance from a point to its nearest other point, on up to
+    1,000 random points. A low quantile measures the densest part, the sampled surface,
+    even when outliers (which are sparser) are most of the cloud."""
     probe = points[random_subset(points.shape[0], 1000, gen)]
     d, _ = index.query(probe, k=2)
-    return float(d[:, 1].median())
+    return float(d[:, 1].quantile(q))
 
 
 def detect_reflection_plane(
@@ -270,7 +275,7 @@ def detect_reflection_plane(
     sample = xs[random_subset(n, n_init_samples, gen)]  # (n2, 3)
     sub = xs[random_subset(n, n_refine_samples, gen)] if n > n_refine_samples else xs
     sub_index = KNNIndex(sub)
-    spacing = _median_spacing(sub, sub_index, gen)
+    spacing = _spacing(sub, sub_index, gen, q=SPACING_QUANTILE)
     cand, b_cand, order = initial_normals(
         sample, sub_index, init=init, n_directions=n_directions, grid_step=grid_step, beam=beam, spacing=spacing,
         dtype=dtype,
@@ -339,7 +344,7 @@ def detect_reflection_plane(
     if final is None:
         final = full_index.query(reflect_points(xs, normal, offset))
     dist, nn_idx = final
-    tol = inlier_factor * max(_median_spacing(xs, full_index, gen), 1e-12)
+    tol = inlier_factor * max(_spacing(xs, full_index, gen), 1e-12)
     inliers = dist <= tol
     mutual = mutual_nearest(nn_idx, nn_idx)
     idx = torch.arange(n)
