@@ -113,6 +113,7 @@ def alternate(
     tol_offset: float,
     accelerate: bool,
     patience: int = 5,
+    max_residual: float = float("inf"),
 ):
     """Algorithm 6 on ``points`` (queried against ``index`` over the same points).
 
@@ -147,6 +148,12 @@ def alternate(
         # are rarely mutual, so with many of them the median over all pairs is an
         # outlier's residual and would keep outlier pairs in the fit.
         keep = mutual & (dist <= dist[mutual].median()) if bool(mutual.any()) else dist <= med
+        # Pairs farther apart than `max_residual` (the inlier tolerance) are dropped too,
+        # while at least a tenth of the points stay: at heavy outlier rates some outlier
+        # pairs pass the median and bias the plane by degrees.
+        tight = keep & (dist <= max_residual)
+        if int(tight.sum()) >= max(3, points.shape[0] // 10):
+            keep = tight
         if int(keep.sum()) < 3:
             keep = dist <= med
         center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)

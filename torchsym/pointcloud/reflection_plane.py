@@ -337,6 +337,7 @@ def detect_reflection_plane(
         normal, offset, it2, converged, _, pdist, pnn = alternate(
             pol, pol_index, normal, offset, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
             accelerate=accelerate,
+            max_residual=inlier_factor * _spacing(pol, pol_index, gen, q=SPACING_QUANTILE),
         )
         iters += it2
         if pol is xs and pdist is not None:
