@@ -10,6 +10,7 @@ the one inherited from the embedding (Eq. 7.7), so ``inner`` is a plain sum of p
 
 from __future__ import annotations
 
+import abc
 import math
 
 import torch
@@ -24,7 +25,7 @@ def _float_tol(dtype: torch.dtype, size: int) -> float:
     return 10.0 * math.sqrt(torch.finfo(dtype).eps) * max(1, size)
 
 
-class Manifold:
+class Manifold(abc.ABC):
     """A Riemannian manifold embedded in a Euclidean space of ``point_shape`` tensors.
 
     Subclasses set ``point_shape`` (the trailing dimensions of a point), ``dim`` (the
@@ -106,36 +107,37 @@ class Manifold:
         return self.inner(x, u, u).clamp_min(0).sqrt()
 
     # ----------------------------------------------------------------- projections
+    @abc.abstractmethod
     def proju(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """Orthogonal projection of an ambient vector ``u`` onto the tangent space at ``x``."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def projx(self, x: torch.Tensor) -> torch.Tensor:
         """A nearby point of the manifold (the nearest one where that is cheap)."""
-        raise NotImplementedError
 
     def egrad2rgrad(self, x: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
         """Riemannian gradient from the Euclidean gradient ``g`` (a projection, Eq. 7.8)."""
         return self.proju(x, g)
 
+    @abc.abstractmethod
     def ehess2rhess(self, x: torch.Tensor, g: torch.Tensor, h: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """Riemannian Hessian along ``u`` from the Euclidean gradient ``g`` and Hessian-vector product ``h``."""
-        raise NotImplementedError
 
     # ----------------------------------------------------------------- moving
+    @abc.abstractmethod
     def retr(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """Retraction: a point of the manifold near ``x + u``, with ``retr(x, 0) == x``."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def expmap(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """Exponential map: follow the geodesic from ``x`` with initial velocity ``u`` for time 1."""
-        raise NotImplementedError
 
     def transp(self, x: torch.Tensor, y: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """Vector transport of ``u`` from ``x`` to ``y`` by projection."""
         return self.proju(y, u)
 
     # ----------------------------------------------------------------- sampling
+    @abc.abstractmethod
     def random_point(self, *batch: int, generator: torch.Generator | None = None, dtype: torch.dtype = torch.float64) -> torch.Tensor:
         """A random point of shape ``(*batch, *point_shape)``.
 
@@ -145,7 +147,6 @@ class Manifold:
                 generator seeded with 0, so the same call gives the same bits.
             dtype: floating dtype of the point.
         """
-        raise NotImplementedError
 
     def random_tangent(self, x: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
         """A random tangent vector at ``x``: a standard Gaussian projected onto the tangent space.
