@@ -139,3 +139,22 @@ class TestAnglesAndConversions:
         c = torch.tensor([1.0, 2.0, 3.0], dtype=torch.float64)
         n2, b2 = plane_from_reflection(reflection_matrix(n), c)
         assert torch.allclose(n2, n) and torch.allclose(b2, -(n * c).sum())
+
+
+class TestTangentBasis:
+    def test_orthonormal_frame(self):
+        from torchsym.geometry import tangent_basis
+
+        n = torch.nn.functional.normalize(_rand(6, 3), dim=-1)
+        n[0] = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)  # the helper axis switches here
+        b = tangent_basis(n)  # (6, 3, 2)
+        assert torch.allclose(b.transpose(-1, -2) @ b, torch.eye(2, dtype=torch.float64).expand(6, 2, 2), atol=1e-12)
+        assert float((n.unsqueeze(-2) @ b).abs().max()) < 1e-12
+        # right-handed: u x v = n
+        assert torch.allclose(torch.linalg.cross(b[..., 0], b[..., 1]), n, atol=1e-12)
+
+    def test_exception(self):
+        from torchsym.geometry import tangent_basis
+
+        with pytest.raises(InputShapeError, match=r"normal: expected \(\.\.\., 3\), got \(2,\)"):
+            tangent_basis(torch.ones(2))

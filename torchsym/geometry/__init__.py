@@ -12,6 +12,7 @@ from torchsym.geometry.reflection import (
     reflection_matrix,
     reflection_matrix_from_angles,
     reflection_transform,
+    tangent_basis,
 )
 
 __all__ = [
@@ -26,4 +27,5 @@ __all__ = [
     "reflection_matrix",
     "reflection_matrix_from_angles",
     "reflection_transform",
+    "tangent_basis",
 ]

@@ -28,6 +28,7 @@ __all__ = [
     "reflection_matrix",
     "reflection_matrix_from_angles",
     "reflection_transform",
+    "tangent_basis",
 ]
 
 
@@ -212,6 +213,23 @@ def plane_from_pairs(
         norm = n.norm(dim=-1).clamp_min(torch.finfo(points.dtype).tiny)
         n, b = n / norm.unsqueeze(-1), b / norm
     return canonical_sign(n, b)
+
+
+def tangent_basis(normal: torch.Tensor) -> torch.Tensor:
+    """``(..., 3, 2)`` orthonormal basis ``[u, v]`` of the plane orthogonal to a unit 3D ``normal (..., 3)``.
+
+    ``u = normal x e`` with ``e`` the first or second coordinate axis (whichever is farther
+    from the normal), ``v = normal x u``: a right-handed frame ``(u, v, normal)``.
+    """
+    _check_normal(normal)
+    if normal.shape[-1] != 3:
+        raise InputShapeError(f"normal: expected (..., 3), got {tuple(normal.shape)}")
+    ex = torch.tensor([1.0, 0.0, 0.0], dtype=normal.dtype, device=normal.device)
+    ey = torch.tensor([0.0, 1.0, 0.0], dtype=normal.dtype, device=normal.device)
+    helper = torch.where(normal[..., :1].abs() < 0.9, ex, ey)
+    u = torch.linalg.cross(normal, helper)
+    u = u / u.norm(dim=-1, keepdim=True)
+    return torch.stack([u, torch.linalg.cross(normal, u)], -1)
 
 
 def point_plane_distance(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor | float = 0.0) -> torch.Tensor:

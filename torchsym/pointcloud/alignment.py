@@ -10,7 +10,13 @@ import math
 
 import torch
 
-from torchsym.geometry.reflection import plane_angle, plane_from_pairs, plane_from_reflection, reflect_points
+from torchsym.geometry.reflection import (
+    plane_angle,
+    plane_from_pairs,
+    plane_from_reflection,
+    reflect_points,
+    tangent_basis,
+)
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 
 __all__ = ["alternate", "point_normals", "pre_align", "support"]
@@ -33,10 +39,7 @@ def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
     residual, so outliers pull little; ``robust=False`` weighs all pairs 1.
     """
     dtype = x.dtype
-    helper = torch.tensor([1.0, 0.0, 0.0] if abs(float(normal[0])) < 0.9 else [0.0, 1.0, 0.0], dtype=dtype)
-    u = torch.linalg.cross(normal, helper)
-    u = u / u.norm()
-    basis = torch.stack([u, torch.linalg.cross(normal, u)], 1)  # (3, 2)
+    basis = tangent_basis(normal)  # (3, 2)
     signed = x @ normal + offset  # (N,)
     r = ((x - 2.0 * signed[:, None] * normal - q) * nu).sum(1)  # (N,)
     nun = nu @ normal

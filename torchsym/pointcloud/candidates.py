@@ -12,7 +12,7 @@ import math
 
 import torch
 
-from torchsym.geometry.reflection import angles_to_normal, reflect_points
+from torchsym.geometry.reflection import angles_to_normal, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
 
 __all__ = ["grid_normals", "initial_normals", "score_normals", "sphere_normals"]
@@ -116,10 +116,8 @@ def initial_normals(
     for _ in range(2):
         top = cost.argsort()[:beam]
         base = normals[top]  # (B, 3)
-        helper = torch.where(base[:, :1].abs() < 0.9, torch.tensor([1.0, 0.0, 0.0], dtype=dtype), torch.tensor([0.0, 1.0, 0.0], dtype=dtype))
-        u = torch.linalg.cross(base, helper)
-        u = u / u.norm(dim=1, keepdim=True)
-        v = torch.linalg.cross(base, u)
+        frame = tangent_basis(base)  # (B, 3, 2)
+        u, v = frame[..., 0], frame[..., 1]
         step = math.tan(radius)
         new = base[:, None] + step * (torch.cos(ring)[None, :, None] * u[:, None] + torch.sin(ring)[None, :, None] * v[:, None])
         new = (new / new.norm(dim=-1, keepdim=True)).reshape(-1, 3)

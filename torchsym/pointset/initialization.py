@@ -32,7 +32,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import torch
 from scipy.spatial import cKDTree
+
+from torchsym.geometry.reflection import plane_from_pairs
 
 __all__ = ["pair_search"]
 
@@ -66,7 +69,6 @@ def _polish(normals, offsets, x, sample, tree, h2, steps):
     closed form (the least-squares reflection of :func:`torchsym.geometry.plane_from_pairs`).
     """
     d = x.shape[1]
-    eye = np.eye(d)
     for _ in range(steps):
         signed = sample @ normals.T - offsets  # (m, K)
         moved = sample[None] - 2.0 * signed.T[:, :, None] * normals[:, None, :]  # (K, m, D)
@@ -74,17 +76,14 @@ def _polish(normals, offsets, x, sample, tree, h2, steps):
         dist, idx = dist.reshape(len(normals), -1), idx.reshape(len(normals), -1)
         w = (dist * dist <= 4.0 * h2).astype(float)  # (K, m)
         y = x[idx]  # (K, m, D)
-        mid, chord = 0.5 * (sample[None] + y), sample[None] - y
         wsum = w.sum(1)
-        mean = (w[..., None] * mid).sum(1) / np.maximum(wsum, 1e-300)[:, None]  # (K, D)
-        mc = (mid - mean[:, None]) * np.sqrt(w)[..., None]
-        wc = chord * np.sqrt(w)[..., None]
-        mat = mc.transpose(0, 2, 1) @ mc + 0.25 * ((wc * wc).sum((1, 2))[:, None, None] * eye - wc.transpose(0, 2, 1) @ wc)
-        new = np.linalg.eigh(mat)[1][..., 0]  # (K, D)
+        src = torch.from_numpy(np.ascontiguousarray(np.broadcast_to(sample, y.shape)))
+        fit_n, fit_b = plane_from_pairs(src, torch.from_numpy(y), torch.from_numpy(w))  # n . x + b = 0
+        new, new_off = fit_n.numpy(), -fit_b.numpy()  # here planes are n . x = c
+        flip = np.where((new * normals).sum(-1) < 0, -1.0, 1.0)
         good = wsum > d
-        new = new * np.where((new * normals).sum(-1) < 0, -1.0, 1.0)[:, None]
-        normals = np.where(good[:, None], new, normals)
-        offsets = np.where(good, (normals * mean).sum(-1), offsets)
+        normals = np.where(good[:, None], new * flip[:, None], normals)
+        offsets = np.where(good, new_off * flip, offsets)
     return normals, offsets
 
 
