@@ -375,7 +375,8 @@ class IntrinsicSymmetry(nn.Module):
         self.components = components
         self.seed = check_int(seed, "seed")
 
-    def forward(self, mesh: Mesh) -> IntrinsicSymmetryResult:
+    def forward(self, mesh: Mesh, generator: torch.Generator | None = None) -> IntrinsicSymmetryResult:
+        gen = generator if generator is not None else make_generator(self.seed)
         return intrinsic_symmetry(
             mesh,
             n_eigen=self.n_eigen,
@@ -393,7 +394,7 @@ class IntrinsicSymmetry(nn.Module):
             max_iter=self.max_iter,
             refine_iters=self.refine_iters,
             components=self.components,  # type: ignore[arg-type]
-            generator=make_generator(self.seed),
+            generator=gen,
         )
 
     def extra_repr(self) -> str:
