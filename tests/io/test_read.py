@@ -9,20 +9,24 @@ from torchsym.errors import InputFileError
 from torchsym.io import infer_kind, load_input, read_image, read_mesh, read_pointcloud, write_image, write_ply
 
 
+def _gen(seed: int = 0) -> torch.Generator:
+    return torch.Generator().manual_seed(seed)
+
+
 def _digest(path):
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 class TestRead:
     def test_ply_round_trip(self, tmp_path):
-        pts = torch.rand(50, 3)
-        write_ply(tmp_path / "a.ply", pts, colors=torch.rand(50, 3))
+        pts = torch.rand(50, 3, generator=_gen())
+        write_ply(tmp_path / "a.ply", pts, colors=torch.rand(50, 3, generator=_gen()))
         assert torch.allclose(read_pointcloud(tmp_path / "a.ply"), pts, atol=1e-6)
         kind, data = load_input(tmp_path / "a.ply")
         assert kind == "pointcloud"
 
     def test_mesh_ply(self, tmp_path):
-        write_ply(tmp_path / "m.ply", torch.rand(4, 3), faces=torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        write_ply(tmp_path / "m.ply", torch.rand(4, 3, generator=_gen()), faces=torch.tensor([[0, 1, 2], [0, 2, 3]]))
         kind, mesh = load_input(tmp_path / "m.ply")
         assert kind == "mesh" and mesh.faces.shape == (2, 3)
         kind, pts = load_input(tmp_path / "m.ply", kind="pointcloud")
@@ -44,7 +48,7 @@ class TestRead:
         assert _digest(p) == before
 
     def test_image(self, tmp_path):
-        img = torch.rand(3, 10, 12)
+        img = torch.rand(3, 10, 12, generator=_gen())
         write_image(tmp_path / "i.png", img)
         back = read_image(tmp_path / "i.png")
         assert back.shape == (3, 10, 12) and torch.allclose(back, img, atol=1 / 255 + 1e-6)
@@ -71,7 +75,7 @@ class TestRead:
             load_input(p)
 
     def test_mesh_without_faces(self, tmp_path):
-        write_ply(tmp_path / "pc.ply", torch.rand(5, 3))
+        write_ply(tmp_path / "pc.ply", torch.rand(5, 3, generator=_gen()))
         with pytest.raises(InputFileError, match="holds no triangles"):
             read_mesh(tmp_path / "pc.ply")
 

@@ -20,6 +20,10 @@ from torchsym.pointcloud import (
 )
 
 
+def _gen(seed: int = 0) -> torch.Generator:
+    return torch.Generator().manual_seed(seed)
+
+
 def _deg(a, b):
     return float(plane_angle(a.double(), b.double())) * 180 / math.pi
 
@@ -146,7 +150,7 @@ class TestDetectReflectionPlane:
         with pytest.raises(InputValueError, match="init: expected 'sphere' or 'grid', got 'random'"):
             ReflectionPlaneDetector(init="random")
         with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1, got 0"):
-            detect_reflection_plane(torch.rand(10, 3), n_starts=0)
+            detect_reflection_plane(torch.rand(10, 3, generator=_gen()), n_starts=0)
 
     def test_numpy_input(self, cloud):
         res = torchsym.detect(cloud.points.numpy())
