@@ -82,3 +82,11 @@ class TestRead:
     def test_real_mesh(self, shared_data):
         mesh = read_mesh(shared_data / "meshes" / "dino.off")
         assert mesh.vertices.shape == (3916, 3) and mesh.faces.shape == (7828, 3)
+
+    def test_kind_mismatch(self, tmp_path):
+        write_ply(tmp_path / "m.ply", torch.rand(4, 3, generator=_gen()), faces=torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        with pytest.raises(InputFileError, match="is a mesh, but kind 'image' was asked for"):
+            load_input(tmp_path / "m.ply", kind="image")
+        np.savetxt(tmp_path / "p.xyz", np.ones((5, 3)))
+        with pytest.raises(InputFileError, match="holds a pointcloud, but kind 'mesh' was asked for"):
+            load_input(tmp_path / "p.xyz", kind="mesh")

@@ -41,8 +41,8 @@ def as_tensor(
 ) -> torch.Tensor:
     """Turn ``x`` (tensor, NumPy array or nested list) into a floating-point tensor.
 
-    Integer and boolean input becomes ``torch.get_default_dtype()``; floating input
-    keeps its dtype unless ``dtype`` is given. Raises :class:`InputShapeError` for
+    Integer and boolean tensors and arrays become ``torch.get_default_dtype()``; nested
+    lists become float64; floating input keeps its dtype unless ``dtype`` is given. Raises :class:`InputShapeError` for
     anything that is not numeric.
     """
     if isinstance(x, torch.Tensor):

@@ -169,9 +169,11 @@ def load_input(path: str | Path, kind: str | None = None) -> tuple[str, Any]:
         v, f = _load_meshlab(p, "input")
         if v.shape[0] == 0:
             raise InputFileError(f"input: {str(p)!r} holds no points")
-        verts = torch.from_numpy(v).float()
+        verts = torch.from_numpy(np.ascontiguousarray(v)).to(torch.float32)
         if kind in ("pointcloud", "points") or (kind is None and f.shape[0] == 0):
             return "pointcloud", verts
+        if kind not in (None, "mesh"):
+            raise InputFileError(f"input: {str(p)!r} is a mesh, but kind {kind!r} was asked for")
         if f.shape[0] == 0:
             raise InputFileError(f"input: {str(p)!r} holds no triangles (a point cloud, not a mesh)")
         return "mesh", Mesh(verts, torch.from_numpy(f))

@@ -4,7 +4,9 @@ A detected plane is correct when the angle between its normal and the ground tru
 below ``angle_threshold`` degrees and the centre of the detected plane inside the
 object's bounding box lies within ``distance_threshold`` x the box diagonal of the
 ground-truth plane. The centre is the centroid of the polygon where the plane cuts the
-box (the thesis's points p_e on the box). Precision, recall and F follow from
+box (the thesis's points p_e on the box). The thesis normalises the distance by the
+shortest edge between its intersection points, which depends on which three points are
+taken; we normalise by the box diagonal, which does not. Precision, recall and F follow from
 :mod:`torchsym.metrics.pr`; :func:`plane_pr_curve` sweeps the detection score.
 """
 
