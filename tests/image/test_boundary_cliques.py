@@ -14,7 +14,7 @@ from torchsym.image import (
     boundary_clique_axes,
 )
 from torchsym.image.boundary import boundary_curves, remove_junctions
-from torchsym.image.boundary_cliques import dominant_clique
+from torchsym.image.boundary_cliques import _vertex_cover_lp_zeros, dominant_clique
 from torchsym.metrics.axes import match_axes
 
 
@@ -79,6 +79,33 @@ class TestDominantClique:
     def test_empty(self):
         clique, _ = dominant_clique(np.zeros((4, 4), dtype=bool))
         assert clique.size == 0
+
+    def test_matching_solves_the_lp(self):
+        """The König / double-cover solution is feasible, has HiGHS's optimal value and rounds alike."""
+        from scipy.optimize import linprog
+        from scipy.sparse import coo_matrix, csr_matrix
+        from scipy.sparse.csgraph import maximum_bipartite_matching
+
+        rng = np.random.default_rng(0)
+        for _ in range(10):
+            n = int(rng.integers(20, 120))
+            a = rng.random((n, n)) < 0.1
+            s = rng.choice(n, int(rng.integers(3, n // 3)), replace=False)
+            a[np.ix_(s, s)] = True
+            a = np.triu(a, 1)
+            a = a | a.T
+            cu, cv = np.nonzero(np.triu(~a, 1))
+            zero = _vertex_cover_lp_zeros(n, cu, cv)
+            assert not (zero[cu] & zero[cv]).any()  # a clique of the graph
+            m = cu.size
+            a_ub = coo_matrix((-np.ones(2 * m), (np.repeat(np.arange(m), 2), np.stack([cu, cv], 1).reshape(-1))),
+                              shape=(m, n)).tocsr()
+            res = linprog(np.ones(n), A_ub=a_ub, b_ub=-np.ones(m), bounds=(0, 1), method="highs")
+            assert res.status == 0
+            r, c = np.concatenate([cu, cv]), np.concatenate([cv, cu])
+            match = maximum_bipartite_matching(csr_matrix((np.ones(r.size), (r, c)), shape=(n, n)), perm_type="column")
+            assert res.fun == pytest.approx(0.5 * int((match >= 0).sum()))  # König: LP optimum = matching / 2
+            assert np.array_equal(np.nonzero(zero)[0], np.nonzero(res.x < 0.5)[0])
 
 
 class TestRemoveJunctions:

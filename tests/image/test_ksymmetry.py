@@ -33,6 +33,36 @@ class TestKSymmetryClustering:
         want = torch.nn.functional.normalize(torch.tensor([[1.0, 0.2], [0.1, 1.0]], dtype=torch.float64), dim=1)
         assert torch.allclose((n * want[labels[[0, 40]]]).sum(1).abs(), torch.ones(2, dtype=torch.float64), atol=1e-9)
 
+    def test_matches_per_cluster_loop(self):
+        """The batched update (scatter-add + batched eigh) equals Algorithm 1 written per cluster."""
+        g = torch.Generator().manual_seed(1)
+        l1, r1 = _mirror_pairs([1.0, 0.2], 0.3, 40, g)
+        l2, r2 = _mirror_pairs([0.1, 1.0], -0.2, 40, g)
+        noise = torch.rand(30, 4, generator=g, dtype=torch.float64) * 2 - 1
+        left, right = torch.cat([l1, l2, noise[:, :2]]), torch.cat([r1, r2, noise[:, 2:]])
+        init = torch.tensor([[1.0, 0.1, 0.1], [0.2, 1.0, 0.0], [1.0, -1.0, 0.5]], dtype=torch.float64)
+        for outlier in (None, 0.01):
+            u, labels, _, _, _ = ksymmetry_clustering(left, right, init, outlier_cost=outlier)
+            mid = 0.5 * (left + right)
+            x = torch.cat([mid, torch.ones(mid.shape[0], 1, dtype=torch.float64)], 1)
+            y = torch.stack([right[:, 1] - left[:, 1], left[:, 0] - right[:, 0], torch.zeros_like(mid[:, 0])], 1)
+            ref = init / init.norm(dim=1, keepdim=True)
+            lab = torch.full((left.shape[0],), -2)
+            for _ in range(50):
+                c = (x @ ref.T) ** 2 + (y @ ref.T) ** 2
+                best, new = c.min(1)
+                if outlier is not None:
+                    new = torch.where(best > outlier, torch.full_like(new, -1), new)
+                if torch.equal(new, lab):
+                    break
+                lab = new
+                for i in range(ref.shape[0]):
+                    m = lab == i
+                    if int(m.sum()) >= 2:
+                        ref[i] = torch.linalg.eigh(x[m].T @ x[m] + y[m].T @ y[m])[1][:, 0]
+            assert torch.equal(labels, lab)
+            assert torch.allclose((u * ref).sum(1).abs(), torch.ones(3, dtype=torch.float64), atol=1e-9)
+
 
 class TestKSymmetryAxes:
     def test_smoke(self, single_objects):
