@@ -19,6 +19,7 @@ from scipy.sparse.csgraph import connected_components
 from torchsym.core.checks import check_finite
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.mesh.mesh import Mesh
+from torchsym.mesh.operators import face_areas
 
 __all__ = ["ValidatedMesh", "validate_mesh"]
 
@@ -95,7 +96,7 @@ def validate_mesh(
             f"mesh.faces: expected three distinct vertices per triangle, got {idx.size} degenerate "
             f"triangles with a repeated vertex (first: face {idx[0]} = {f[idx[0]].tolist()})"
         )
-    dbl_area = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)  # (F,)
+    dbl_area = 2.0 * face_areas(v, f)  # (F,)
     flat = dbl_area <= 1e-12 * max(float(dbl_area.max()), np.finfo(float).tiny)
     if flat.any():
         idx = np.flatnonzero(flat)
