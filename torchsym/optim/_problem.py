@@ -8,6 +8,7 @@ a second backward pass through the gradient ("double backward").
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -61,6 +62,18 @@ def check_start(manifold: Manifold, x0: Any, name: str = "x0") -> Any:
     if not ok:
         raise InputValueError(f"{name}: not a point of {manifold}: {reason}")
     return detach(x0)
+
+
+def stop_reason(grad_norm: float, min_grad_norm: float, iterations: int, max_iter: int, t_start: float, max_time: float) -> str | None:
+    """The outer-loop stopping test shared by every solver: ``"grad_norm"``, ``"max_iter"``,
+    ``"max_time"``, or None to go on (step-size stops are each solver's own)."""
+    if grad_norm < min_grad_norm:
+        return "grad_norm"
+    if iterations >= max_iter:
+        return "max_iter"
+    if time.perf_counter() - t_start >= max_time:
+        return "max_time"
+    return None
 
 
 class Problem:

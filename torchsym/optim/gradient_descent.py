@@ -13,6 +13,7 @@ from torchsym.core.checks import check_int, check_positive
 from torchsym.errors import InputValueError
 from torchsym.manifolds.base import Manifold
 from torchsym.optim._problem import Problem, check_start, detach, lincomb
+from torchsym.optim._problem import stop_reason as outer_stop
 from torchsym.optim.result import OptimResult
 
 __all__ = ["gradient_descent"]
@@ -68,14 +69,9 @@ def gradient_descent(
     alpha = 1.0 / max(grad_norm, 1e-300) if grad_norm > 0 else 1.0
     iterations, stop_reason = 0, "max_iter"
     while True:
-        if grad_norm < min_grad_norm:
-            stop_reason = "grad_norm"
-            break
-        if iterations >= max_iter:
-            stop_reason = "max_iter"
-            break
-        if time.perf_counter() - t_start >= max_time:
-            stop_reason = "max_time"
+        reason = outer_stop(grad_norm, min_grad_norm, iterations, max_iter, t_start, max_time)
+        if reason is not None:
+            stop_reason = reason
             break
         iterations += 1
         g2 = grad_norm * grad_norm

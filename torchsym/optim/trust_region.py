@@ -19,6 +19,7 @@ from torchsym.core.checks import check_int, check_positive
 from torchsym.errors import InputValueError
 from torchsym.manifolds.base import Manifold
 from torchsym.optim._problem import Problem, check_start, detach, lincomb
+from torchsym.optim._problem import stop_reason as outer_stop
 from torchsym.optim.result import OptimResult
 
 __all__ = ["trust_region"]
@@ -175,14 +176,9 @@ def trust_region(
     stop_reason = "max_iter"
     eps = torch.finfo(x[0].dtype if isinstance(x, tuple) else x.dtype).eps
     while True:
-        if grad_norm < min_grad_norm:
-            stop_reason = "grad_norm"
-            break
-        if iterations >= max_iter:
-            stop_reason = "max_iter"
-            break
-        if time.perf_counter() - t_start >= max_time:
-            stop_reason = "max_time"
+        reason = outer_stop(grad_norm, min_grad_norm, iterations, max_iter, t_start, max_time)
+        if reason is not None:
+            stop_reason = reason
             break
         iterations += 1
         eta, heta, n_inner, tcg_stop = _truncated_cg(problem, grad, Delta, kappa, theta, max_inner)
