@@ -160,3 +160,58 @@ def test_no_pairs_gives_identity(shared_data):
     assert out.pairs.shape[0] == 0
     assert torch.equal(out.map[kept], kept)
     assert any("no symmetry found" in n for n in out.notes)
+
+
+@pytest.fixture(scope="module")
+def spectral(blob):
+    from torchsym.mesh.operators import laplacian_eigen, mass_matrix
+
+    mesh, gt = blob
+    v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+    _, evecs = laplacian_eigen(v, f, 13, generator=torch.Generator().manual_seed(0))
+    area = mass_matrix(v, f).diagonal()
+    signs = np.sign((area[:, None] * evecs * evecs[gt]).sum(0))  # even +1, odd -1
+    return evecs, signs
+
+
+class TestSignHypotheses:
+    def test_true_signs_are_most_consistent(self, spectral):
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh import map_consistency
+
+        evecs, signs = spectral
+        tree = cKDTree(evecs)
+        rows = np.arange(0, evecs.shape[0], 3)
+        true_q = map_consistency(tree, evecs, signs, rows)
+        assert true_q < 0.3
+        for k in range(1, 13):
+            wrong = signs.copy()
+            wrong[k] *= -1
+            assert map_consistency(tree, evecs, wrong, rows) > 2.0 * true_q
+
+    def test_a_flipped_low_confidence_sign_is_repaired(self, spectral):
+        from torchsym.mesh.intrinsic import _sign_hypotheses
+
+        evecs, signs = spectral
+        confidence = np.ones(13)
+        confidence[[4, 7, 9]] = [0.1, 0.05, 0.2]  # the three least confident
+        wrong = signs.copy()
+        wrong[7] *= -1
+        chosen, before, after = _sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
+        np.testing.assert_array_equal(chosen, signs)
+        assert after < 0.6 * before
+        # a confident wrong sign is outside the hypotheses and stays
+        wrong = signs.copy()
+        wrong[2] *= -1
+        chosen, _, _ = _sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
+        assert chosen[2] == wrong[2]
+
+    def test_thesis_rule_and_bad_setting(self, blob):
+        mesh, gt = blob
+        thesis = intrinsic_symmetry(mesh, sign_hypotheses=0)
+        assert correspondence_rate(mesh, thesis.map, ground_truth=gt).rate == 1.0
+        with pytest.raises(InputValueError, match="sign_hypotheses"):
+            intrinsic_symmetry(mesh, sign_hypotheses=-1)
+        with pytest.raises(InputValueError, match="sign_hypotheses"):
+            IntrinsicSymmetry(sign_hypotheses=1.5)

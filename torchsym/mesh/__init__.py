@@ -11,6 +11,7 @@ from torchsym.mesh.intrinsic import (
     IntrinsicSymmetry,
     IntrinsicSymmetryResult,
     intrinsic_symmetry,
+    map_consistency,
     symmetry_colors,
 )
 from torchsym.mesh.mesh import Mesh
@@ -44,6 +45,7 @@ __all__ = [
     "hks_feature_points",
     "hks_times",
     "intrinsic_symmetry",
+    "map_consistency",
     "laplacian_eigen",
     "mass_matrix",
     "pair_affinity",
