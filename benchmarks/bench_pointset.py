@@ -110,11 +110,22 @@ def exact_target(dims, ns, n_sets):
 
 
 def oracle_target(n_sets, sigma2=0.01, n=300, d=3):
-    ours, oracle = [], []
+    """Our error against the oracle's, and the same alternation started from the true plane.
+
+    The start from the truth separates the two ways of failing: a search that misses the
+    basin of the true plane, and an objective (Eq. 7.5) whose minimum is not at the true
+    plane. A set counts as "objective prefers a wrong plane" when our plane is more than
+    5 deg off and yet has a lower symmetry error than the optimum reached from the truth:
+    no search can fix those, only another objective.
+    """
+    ours, oracle, from_truth, wrong_but_better = [], [], [], 0
     for k in range(n_sets):
         s = planted(n, d, sigma2, seed=500 + k)
         r = point_symm(s.points)
+        t = point_symm(s.points, initial=(s.normal, s.offset))
         ours.append(float(normal_angle_error(r.normal, s.normal)))
+        from_truth.append(float(normal_angle_error(t.normal, s.normal)))
+        wrong_but_better += int(ours[-1] > 5.0 and r.cost < t.cost)
         nrm, _ = plane_from_pairs(s.points, s.points[s.correspondence])
         oracle.append(float(normal_angle_error(nrm, s.normal)))
     return {
@@ -123,6 +134,10 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3):
         "median_error_deg": statistics.median(ours),
         "oracle_median_error_deg": statistics.median(oracle),
         "ratio": statistics.median(ours) / statistics.median(oracle),
+        "from_truth_median_error_deg": statistics.median(from_truth),
+        "from_truth_ratio": statistics.median(from_truth) / statistics.median(oracle),
+        "wrong_plane_lower_cost": wrong_but_better,
+        "wrong_plane": sum(e > 5.0 for e in ours),
     }
 
 
@@ -291,6 +306,16 @@ def to_markdown(res) -> str:
         (
             f"median normal error {o['median_error_deg']:.3f} deg; oracle (plane fitted to the true correspondences) "
             f"{o['oracle_median_error_deg']:.3f} deg; ratio {o['ratio']:.2f}."
+        ),
+        "",
+        (
+            f"The same alternation started from the true plane (`point_symm(points, initial=...)`) ends at "
+            f"{o['from_truth_median_error_deg']:.3f} deg, {o['from_truth_ratio']:.2f}x the oracle: even a perfect start "
+            "does not reach the 1.5x target, because the optimum of the thesis's objective (Eq. 7.5, hard "
+            "correspondences) near the true plane is itself that far from it at this noise (sigma = 0.1, about the "
+            f"spacing of the points). Our plane is more than 5 deg off on {o['wrong_plane']} of {o['sets']} sets; on "
+            f"{o['wrong_plane_lower_cost']} of them it has a lower symmetry error than the optimum reached from the "
+            "truth (the objective prefers the wrong plane), on the others the search missed the true basin."
         ),
         "",
         "Smaller noise, same protocol:",

@@ -131,6 +131,33 @@ class TestPointSymm:
         with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1"):
             point_symm(s.points, n_starts=0)
 
+    def test_initial_plane(self):
+        # a warm start a few degrees off the truth converges to the exact plane
+        s = planted(60, 3, 21)
+        tilt = s.normal + 0.05 * torch.tensor([1.0, -1.0, 0.5], dtype=DT)
+        res = point_symm(s.points, initial=(tilt, s.offset + 0.01))
+        assert math.degrees(float(plane_angle(res.normal, s.normal))) < 1e-6
+        assert torch.equal(res.permutation, s.correspondence)
+        module = PointSymm()(s.points, initial=(tilt.tolist(), float(s.offset)))
+        assert torch.equal(module.permutation, res.permutation)
+        # the start is taken in input coordinates: moving the set moves the start with it
+        moved = point_symm(s.points + 5.0, initial=(tilt, s.offset + 0.01 - 5.0 * tilt.sum()))
+        assert torch.equal(moved.permutation, res.permutation)
+
+    @pytest.mark.parametrize(
+        "initial, text",
+        [
+            (torch.ones(3), "initial: expected a \\(normal, offset\\) pair"),
+            ((torch.ones(2), 0.0), r"initial\[0\]: expected \(N, D\) with D = 3"),
+            ((torch.zeros(3), 0.0), r"initial\[0\]: expected a non-zero normal"),
+            ((torch.ones(3), float("nan")), r"initial\[1\]: expected a finite scalar"),
+            ((torch.tensor([1.0, float("inf"), 0.0]), 0.0), r"initial\[0\]: expected finite values"),
+        ],
+    )
+    def test_initial_plane_errors(self, initial, text):
+        with pytest.raises((InputShapeError, InputValueError), match=text):
+            point_symm(planted(20, 3, 0).points, initial=initial)
+
     def test_no_symmetry_low_score(self):
         pts = torch.rand(80, 3, generator=gen(13), dtype=DT)
         res = point_symm(pts)

@@ -143,6 +143,23 @@ def _alternate(var, assign, manifold, x_t, max_iter):
     return var, perm, dist2, it, converged
 
 
+def _initial_plane(initial: Any, mu: np.ndarray, radius: float, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """The caller's ``(normal, offset)`` as a unit normal and a point on the plane, normalised."""
+    if not isinstance(initial, (tuple, list)) or len(initial) != 2:
+        raise InputValueError(f"initial: expected a (normal, offset) pair, got {type(initial).__name__}")
+    normal = check_points(torch.as_tensor(initial[0]).reshape(1, -1), "initial[0]", dim=d, min_points=1)
+    normal = normal.detach().to("cpu", torch.float64).numpy()[0]
+    offset = torch.as_tensor(initial[1], dtype=torch.float64)
+    if offset.numel() != 1 or not bool(torch.isfinite(offset).all()):
+        raise InputValueError(f"initial[1]: expected a finite scalar offset, got shape {tuple(offset.shape)}")
+    length = float(np.linalg.norm(normal))
+    if length == 0.0:
+        raise InputValueError("initial[0]: expected a non-zero normal, got the zero vector")
+    normal, offset_n = normal / length, float(offset) / length
+    point = -offset_n * normal  # on the plane, input coordinates
+    return normal, (point - mu) / radius
+
+
 def _reflect(x_np: np.ndarray, var) -> np.ndarray:
     *rots, t = var
     s = tf.reflection_from_rotations(rots).numpy()
@@ -162,6 +179,7 @@ def point_symm(
     n_neighbors: int = 10,
     exact_max_points: int = 2000,
     n_starts: int = 4,
+    initial: tuple[Any, Any] | None = None,
     generator: torch.Generator | None = None,
 ) -> PointSymmResult:
     """Find the reflection symmetry hyperplane of a point set and the mirror of every point.
@@ -212,8 +230,11 @@ def point_symm(
         exact_max_points: largest ``N`` solved by the exact assignment under ``"auto"``.
         n_starts: most starting planes (see above). The thesis starts once, from the median
             plane (``n_starts=1``); the default 4 makes the search far less likely to end in
-            a wrong plane under noise (at ``sigma^2 = 1e-3``, 1 failure in 15 sets instead
-            of 6 in ``benchmarks/bench_pointset.py``).
+            a wrong plane under noise (at ``sigma^2 = 1e-3``, 2 failures in 15 sets instead
+            of 7 on the sets of ``benchmarks/bench_pointset.py``).
+        initial: ``(normal (D,), offset ())`` of a hyperplane ``normal . x + offset = 0`` to
+            start the alternation from instead of the pair search (a warm start, e.g. from
+            a previous frame or a learned predictor); None runs the search.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
@@ -244,11 +265,15 @@ def point_symm(
     rng = numpy_rng(make_generator(generator))
     tree = cKDTree(xn)
 
-    # Initialisation (Sec. 7.2.4).
-    normal0, t0, run_normals, run_points, run_errors, found = pair_search(
-        xn, rng, n_runs=n_runs, eps_theta=math.radians(eps_theta), eps_d=eps_d, tree=tree
-    )
-    logger.debug("pair search: %d of %d runs found a pair within the tolerances", found, n_runs)
+    # Initialisation (Sec. 7.2.4), or the caller's plane.
+    if initial is None:
+        normal0, t0, run_normals, run_points, run_errors, found = pair_search(
+            xn, rng, n_runs=n_runs, eps_theta=math.radians(eps_theta), eps_d=eps_d, tree=tree
+        )
+        logger.debug("pair search: %d of %d runs found a pair within the tolerances", found, n_runs)
+        starts = _starts(normal0, t0, run_normals, run_points, run_errors, n_starts)
+    else:
+        starts = [_initial_plane(initial, mu, radius, d)]
     method = assignment if assignment != "auto" else ("exact" if n <= exact_max_points else "sparse")
     n_matches = None if match_fraction >= 1.0 else max(1, round(match_fraction * n))
     manifold = tf.rotation_manifold(d)
@@ -258,7 +283,7 @@ def point_symm(
         return mirror_assignment(xn, _reflect(xn, v), n_matches=n_matches, method=method, n_neighbors=n_neighbors, tree=tree)
 
     best = None
-    for start_normal, start_point in _starts(normal0, t0, run_normals, run_points, run_errors, n_starts):
+    for start_normal, start_point in starts:
         var = (*tf.rotations_from_normal(torch.from_numpy(start_normal)), torch.from_numpy(start_point).clone())
         var, perm, dist2, it, converged = _alternate(var, assign, manifold, x_t, max_iter)
         total = float(dist2[perm >= 0].sum())
@@ -312,7 +337,8 @@ class PointSymm(nn.Module):
     runs of the pair search; Algorithm 7 run until the correspondences stop changing) except
     ``n_starts`` (see :func:`point_symm`);
     ``seed`` seeds the generator used when ``forward`` is called without one. ``forward``
-    takes ``points (N, D)`` and returns a :class:`PointSymmResult`.
+    takes ``points (N, D)`` (and optionally ``initial``, a starting plane) and returns a
+    :class:`PointSymmResult`.
     """
 
     def __init__(
@@ -350,9 +376,11 @@ class PointSymm(nn.Module):
             "n_starts": self.n_starts,
         }
 
-    def forward(self, points: Any, generator: torch.Generator | None = None) -> PointSymmResult:
+    def forward(
+        self, points: Any, generator: torch.Generator | None = None, initial: tuple[Any, Any] | None = None
+    ) -> PointSymmResult:
         gen = make_generator(self.seed) if generator is None else generator
-        return point_symm(points, generator=gen, **self.settings())
+        return point_symm(points, generator=gen, initial=initial, **self.settings())
 
     def extra_repr(self) -> str:
         return ", ".join(f"{k}={v!r}" for k, v in {**self.settings(), "seed": self.seed}.items())
