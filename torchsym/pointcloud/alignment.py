@@ -21,6 +21,12 @@ from torchsym.matching.knn import KNNIndex, mutual_nearest
 
 __all__ = ["alternate", "point_normals", "pre_align", "support"]
 
+# Progress of Algorithm 6 (extrapolation, stall detection, the best plane kept) is judged
+# by this quantile of the residuals. The median is an outlier's residual once outliers are
+# half the cloud and stays flat while the surface aligns; the lower quartile still moves
+# (at 200 % outliers it took the share of planes within 1 degree from 0.44 to 0.82).
+PROGRESS_QUANTILE = 0.25
+
 
 def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
     """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
@@ -125,20 +131,20 @@ def alternate(
     Sec. 5.2.3), and refits the plane. Nearest-neighbour pairs slide along smooth
     surfaces, so far from the optimum the plane creeps by a near-constant small angle
     per step. With ``accelerate`` the step is extrapolated (x2, x4, ... as in Besl and
-    McKay's accelerated ICP) while the median residual keeps falling; a step is never
-    taken unless it lowers that residual.
+    McKay's accelerated ICP) while the progress residual (the ``PROGRESS_QUANTILE``
+    quantile of all residuals) keeps falling; a step is never taken unless it lowers it.
 
     It ends when the normal moves less than ``tol_angle`` degrees and the offset less than
-    ``tol_offset`` (converged), or after ``patience`` steps without a lower median
+    ``tol_offset`` (converged), or after ``patience`` steps without a lower progress
     residual (not converged; the best plane seen is returned).
 
-    Returns ``(normal, offset, iterations, converged, median residual, residuals,
+    Returns ``(normal, offset, iterations, converged, progress residual, residuals,
     nearest indices)``; the last two are for the returned plane, or None.
     """
 
     def evaluate(n_: torch.Tensor, b_: torch.Tensor):
         d_, j_ = index.query(reflect_points(points, n_, b_))
-        return d_, j_, d_.median()
+        return d_, j_, d_.quantile(PROGRESS_QUANTILE)
 
     converged = False
     it = 0
@@ -183,7 +189,7 @@ def alternate(
             converged = True
             break
         # With outliers or noise the trimmed set can wander without settling: stop after
-        # `patience` steps that do not lower the median residual, keeping the best plane.
+        # `patience` steps that do not lower the progress residual, keeping the best plane.
         if bool(med < best[2]):
             best, stalled = (normal, offset, med), 0
         else:

@@ -25,9 +25,14 @@ Two changes make it more accurate and faster; both are switchable and measured i
   best by a beam search, add the cloud's principal axes (for an exactly symmetric set the
   normal is one of them), align each start by robust point-to-plane Gauss-Newton on a
   subsample, and keep the one with the highest soft share of points that find a mirror.
+  Starts are tried in rank order until one reaches the support a perfect symmetry would
+  have (calibrated on held-out points when the subsample is not the whole cloud) or
+  clearly dominates the others; when none does (heavy outliers, missing parts), each is
+  also run through a few steps of Algorithm 6 on the subsample, whose mutual, trimmed
+  pairs still move a start where the point-to-plane steps stall.
   The winner is then run through Algorithm 6 on the whole cloud (mutual pairs, trimmed
-  at the median residual of the mutual pairs, extrapolated steps, the thesis's
-  tolerances). ``configs/pointcloud_plane_thesis.yaml`` turns these changes off as far as
+  at the median residual of the mutual pairs, extrapolated steps, progress judged by the
+  lower quartile of the residuals, the thesis's tolerances). ``configs/pointcloud_plane_thesis.yaml`` turns these changes off as far as
   they are switchable (see the settings below).
 
 Nearest neighbours use scipy's cKDTree on the CPU and chunked ``cdist`` elsewhere
@@ -43,6 +48,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 from torch import nn
 
@@ -53,7 +59,6 @@ from torchsym.core.results import Result
 from torchsym.errors import InputValueError
 from torchsym.geometry.reflection import (
     canonical_sign,
-    plane_angle,
     reflect_points,
     reflection_matrix,
     reflection_transform,
@@ -66,6 +71,16 @@ log = logging.getLogger(__name__)
 
 #: quantile of nearest-neighbour distances that sets the kernel widths of the search
 SPACING_QUANTILE = 0.1
+# When no start is accepted after the pre-alignment, Algorithm 6 runs from each on the
+# subsample for at most FALLBACK_ITER steps (to the pre-alignment's angle tolerance; the
+# polish on the whole cloud does the rest), and the search stops once START_PATIENCE starts
+# in a row have not raised the best support by 0.005.
+FALLBACK_ITER = 10
+START_PATIENCE = 5
+# A start whose support is DOMINANCE times the median support of at least DOMINANCE_AFTER
+# tried starts ends the search (see _dominant).
+DOMINANCE = 1.5
+DOMINANCE_AFTER = 6
 
 __all__ = ["ReflectionPlaneDetector", "ReflectionPlaneResult", "detect_reflection_plane", "sphere_normals"]
 
@@ -150,6 +165,17 @@ def _check_settings(**s: Any) -> dict[str, Any]:
     return out
 
 
+def _dominant(supports: list[float]) -> bool:
+    """True when, after at least ``DOMINANCE_AFTER`` starts, the best support is
+    ``DOMINANCE`` times the median of all of them: a clear winner, though below the
+    acceptance level (outliers have no mirror, so the true plane's support is about the
+    share of inliers). On the benchmark's clouds with 50 % outliers this cut the time per
+    cloud about 3x at the same F."""
+    if len(supports) < DOMINANCE_AFTER:
+        return False
+    return max(supports) >= DOMINANCE * float(np.median(supports))
+
+
 def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float = 0.5) -> float:
     """Quantile ``q`` of the distance from a point to its nearest other point, on up to
     1,000 random points. A low quantile measures the densest part, the sampled surface,
@@ -166,7 +192,7 @@ def detect_reflection_plane(
     init: str = "sphere",
     n_directions: int = 100,
     grid_step: float = 20.0,
-    n_starts: int = 3,
+    n_starts: int = 40,
     beam: int = 8,
     min_start_separation: float = 10.0,
     n_refine_samples: int = 3000,
@@ -194,7 +220,16 @@ def detect_reflection_plane(
             ``"grid"``: the thesis's (theta_x, theta_y) grid in ``grid_step`` degrees.
         n_directions: normals scored with ``init="sphere"``.
         grid_step: grid spacing in degrees with ``init="grid"`` (thesis: 20).
-        n_starts: best well-separated initial normals refined (thesis: 1).
+        n_starts: most well-separated initial normals refined, in rank order, until one is
+            accepted (see ``accept``; thesis: 1). Under heavy outliers the starts ranked
+            first often lie in a wrong basin although the true plane has the higher support,
+            so more starts are tried there, and when none is accepted each is also run
+            through a few steps of Algorithm 6 on the subsample (see ``FALLBACK_ITER``); a
+            clean cloud accepts one of the first. With the fallback and the lower-quartile
+            progress test of :func:`~torchsym.pointcloud.alignment.alternate`, on the
+            benchmark's clouds F went from 0.62 to 0.91 at 200 % outliers and from 0.65 to
+            0.74 with 28 % missing, at 0.4 s instead of 0.2 s per 3,000-point cloud; under
+            heavy perturbation nothing is accepted and a cloud takes about 0.6 s.
         beam: normals kept in each round of the coarse-to-fine search (``init="sphere"``).
         min_start_separation: smallest angle in degrees between two starts.
         n_refine_samples: points used to refine each start before the final polish on
@@ -220,8 +255,11 @@ def detect_reflection_plane(
         coarse_tol: the pre-alignment stops when the normal moves less than this (degrees)...
         coarse_iter: ... or after this many steps (on a subsample it ends in a jitter of
             a few hundredths of a degree that the polish removes).
-        accept: stop trying further starts once one explains this share of the subsample
-            (starts are tried PCA axes first, then by initial cost).
+        accept: stop trying further starts once one's support reaches this share of the
+            support a perfect symmetry would have on the subsample (starts are tried PCA
+            axes first, then by initial cost). That reference is 1 when the subsample is the
+            whole cloud; otherwise it is the support of points left out of the subsample
+            against it (a mirror point is as far from the subsample as any left-out point).
         inlier_factor: a point is an inlier when its mirror image is within this many
             median point spacings of the cloud.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
@@ -288,39 +326,73 @@ def detect_reflection_plane(
         for k in range(3):
             nk = axes[:, k].to(dtype)
             starts.append((nk, -(sample @ nk).median()))
-    chosen: list[torch.Tensor] = []
+    # greedy: in rank order, keep a normal at least min_start_separation from those kept
+    # (one matrix of |cos| between candidates instead of a plane_angle call per pair)
+    too_close = (cand @ cand.T).abs() > math.cos(math.radians(min_start_separation))  # (K, K)
+    blocked = torch.zeros(cand.shape[0], dtype=torch.bool)
+    n_chosen = 0
     for k in order.tolist():
-        if all(float(plane_angle(cand[k], c)) * 180 / math.pi >= min_start_separation for c in chosen):
-            chosen.append(cand[k])
-            starts.append((cand[k], b_cand[k]))
-        if len(chosen) == n_starts:
+        if n_chosen == n_starts:
             break
+        if not bool(blocked[k]):
+            starts.append((cand[k], b_cand[k]))
+            blocked |= too_close[k]
+            n_chosen += 1
     t_init = time.perf_counter()
 
     # Refine every start on the subsample; keep the one most points agree with.
     sub_tol = inlier_factor * spacing
+    reference = 1.0
+    if sub is not xs:
+        held_out = xs[random_subset(n, min(n, 1000), gen)]
+        d_ref, _ = sub_index.query(held_out)
+        reference = float(torch.exp(-0.5 * (d_ref / sub_tol) ** 2).mean())
     sub_normals = point_normals(sub, sub_index) if coarse else None
     align_q = sub[random_subset(sub.shape[0], 1000, gen)] if sub.shape[0] > 1000 else sub
     best = None
     iters = 0
     tried = 0
+
+    def run_alternate(nk, bk, limit=max_iter, tol=tol_angle):
+        nk, bk, it_a, _, _, _, _ = alternate(
+            sub, sub_index, nk, bk, update=update, max_iter=limit, tol_angle=tol, tol_offset=tol_offset,
+            accelerate=accelerate,
+        )
+        return nk, bk, it_a
+
+    aligned = []
     for nk, bk in starts:
         if coarse:
             nk, bk, it_k = pre_align(
                 align_q, sub, sub_index, sub_normals, nk, bk, max_iter=coarse_iter, tol_angle=coarse_tol
             )
         else:
-            nk, bk, it_k, _, _, _, _ = alternate(
-                sub, sub_index, nk, bk, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
-                accelerate=accelerate,
-            )
+            nk, bk, it_k = run_alternate(nk, bk)
         frac, med = support(sub, sub_index, nk, bk, sub_tol)
+        aligned.append((frac, nk, bk, it_k))
         if best is None or (frac, -med) > (best[2], -best[3]):
             best = (nk, bk, frac, med)
             iters = it_k
         tried += 1
-        if frac >= accept:
+        if frac >= accept * reference or _dominant([a[0] for a in aligned]):
             break
+    if coarse and best[2] < accept * reference:
+        # No start was accepted after the pre-alignment: run Algorithm 6 on the subsample
+        # from each pre-aligned start, best supported first (see FALLBACK_ITER). Under heavy
+        # outliers the point-to-plane steps barely move a start; the mutual, trimmed pairs
+        # of Algorithm 6 still do.
+        since = 0
+        refined: list[float] = []
+        for _, nk, bk, it_k in sorted(aligned, key=lambda a: -a[0]):
+            nk, bk, it_a = run_alternate(nk, bk, FALLBACK_ITER, max(tol_angle, coarse_tol))
+            frac, med = support(sub, sub_index, nk, bk, sub_tol)
+            refined.append(frac)
+            since = 0 if frac > best[2] + 0.005 else since + 1
+            if (frac, -med) > (best[2], -best[3]):
+                best = (nk, bk, frac, med)
+                iters = it_k + it_a
+            if frac >= accept * reference or since >= START_PATIENCE or _dominant(refined):
+                break
     normal, offset = best[0], best[1]
     converged = False
     t_refine = time.perf_counter()
@@ -406,7 +478,7 @@ class ReflectionPlaneDetector(nn.Module):
         init: str = "sphere",
         n_directions: int = 100,
         grid_step: float = 20.0,
-        n_starts: int = 3,
+        n_starts: int = 40,
         beam: int = 8,
         min_start_separation: float = 10.0,
         n_refine_samples: int = 3000,

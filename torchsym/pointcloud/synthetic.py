@@ -14,6 +14,7 @@ from torchsym.core.checks import check_in_range, check_int, check_points, check_
 from torchsym.core.random import make_generator
 from torchsym.core.results import Result
 from torchsym.geometry.reflection import reflect_points
+from torchsym.manifolds.special_orthogonal import SpecialOrthogonal
 from torchsym.mesh.mesh import Mesh
 
 __all__ = [
@@ -46,21 +47,13 @@ class SymmetricCloud(Result):
     mirror: torch.Tensor
 
 
-def _random_rotation(gen: torch.Generator, dtype: torch.dtype) -> torch.Tensor:
-    q, r = torch.linalg.qr(torch.randn(3, 3, generator=gen, dtype=torch.float64))
-    q = q * torch.sign(torch.diagonal(r)).unsqueeze(0)
-    if torch.det(q) < 0:
-        q[:, 0] = -q[:, 0]
-    return q.to(dtype)
-
-
 def random_rigid_motion(
     cloud: SymmetricCloud, *, translation: float = 1.0, generator: torch.Generator | int | None = None
 ) -> SymmetricCloud:
     """Apply a uniformly random rotation and a Gaussian translation (std ``translation``)."""
     gen = make_generator(generator)
     dt = cloud.points.dtype
-    rot = _random_rotation(gen, dt)
+    rot = SpecialOrthogonal(3).random_point(generator=gen).to(dt)  # Haar-uniform
     t = torch.randn(3, generator=gen, dtype=torch.float64).to(dt) * translation
     pts = cloud.points @ rot.T + t
     n = rot @ cloud.normal
