@@ -74,6 +74,10 @@ class TestIntrinsicSymmetry:
         assert (out.map.numpy() == gt).mean() > 0.99
         with pytest.raises(InputValueError, match="refine_iters: expected an integer >= 0, got -1"):
             intrinsic_symmetry(mesh, refine_iters=-1)
+        with pytest.raises(InputValueError, match="refine_k: expected an integer >= 13, got 8"):
+            intrinsic_symmetry(mesh, refine_k=8)
+        thesis = intrinsic_symmetry(mesh, refine_iters=0, sign_hypotheses=0)  # the thesis's method
+        assert "refine" not in thesis.timings and (thesis.map.numpy() == gt).mean() > 0.99
 
     def test_dropped_component(self, blob):
         mesh, gt = blob
