@@ -219,3 +219,28 @@ class TestSignHypotheses:
             intrinsic_symmetry(mesh, sign_hypotheses=-1)
         with pytest.raises(InputValueError, match="sign_hypotheses"):
             IntrinsicSymmetry(sign_hypotheses=1.5)
+
+
+class TestPairingHypotheses:
+    def test_map_quality(self, blob):
+        from torchsym.mesh import map_quality
+        from torchsym.mesh.operators import laplacian_eigen, mass_matrix
+
+        mesh, gt = blob
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        _, evecs = laplacian_eigen(v, f, 13, generator=torch.Generator().manual_seed(0))
+        area = mass_matrix(v, f).diagonal()
+        true_q = map_quality(evecs, area, gt)
+        assert true_q < 0.5
+        assert map_quality(evecs, area, np.arange(len(gt))) < 1e-8  # the identity: callers rule it out
+        shuffled = np.random.default_rng(0).permutation(len(gt))
+        assert map_quality(evecs, area, shuffled) > 5 * true_q
+
+    def test_setting(self, blob):
+        mesh, gt = blob
+        one = intrinsic_symmetry(mesh, pairing_hypotheses=False)
+        assert correspondence_rate(mesh, one.map, ground_truth=gt).rate == 1.0
+        with pytest.raises(InputValueError, match="pairing_hypotheses: expected True or False"):
+            intrinsic_symmetry(mesh, pairing_hypotheses=1)
+        with pytest.raises(InputValueError, match="pairing_hypotheses: expected True or False"):
+            IntrinsicSymmetry(pairing_hypotheses="yes")

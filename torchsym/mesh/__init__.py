@@ -12,6 +12,7 @@ from torchsym.mesh.intrinsic import (
     IntrinsicSymmetryResult,
     intrinsic_symmetry,
     map_consistency,
+    map_quality,
     symmetry_colors,
 )
 from torchsym.mesh.mesh import Mesh
@@ -46,6 +47,7 @@ __all__ = [
     "hks_times",
     "intrinsic_symmetry",
     "map_consistency",
+    "map_quality",
     "laplacian_eigen",
     "mass_matrix",
     "pair_affinity",
