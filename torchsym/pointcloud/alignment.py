@@ -132,7 +132,8 @@ def alternate(
     surfaces, so far from the optimum the plane creeps by a near-constant small angle
     per step. With ``accelerate`` the step is extrapolated (x2, x4, ... as in Besl and
     McKay's accelerated ICP) while the progress residual (the ``PROGRESS_QUANTILE``
-    quantile of all residuals) keeps falling; a step is never taken unless it lowers it.
+    quantile of all residuals) keeps falling; an extrapolated step is taken only when it
+    lowers that residual.
 
     It ends when the normal moves less than ``tol_angle`` degrees and the offset less than
     ``tol_offset`` (converged), or after ``patience`` steps without a lower progress
@@ -144,7 +145,8 @@ def alternate(
 
     def evaluate(n_: torch.Tensor, b_: torch.Tensor):
         d_, j_ = index.query(reflect_points(points, n_, b_))
-        return d_, j_, d_.quantile(PROGRESS_QUANTILE)
+        # kthvalue: torch.quantile sorts and refuses more than 2^24 values
+        return d_, j_, d_.kthvalue(max(1, int(PROGRESS_QUANTILE * (d_.numel() - 1)) + 1)).values
 
     converged = False
     it = 0
@@ -156,15 +158,23 @@ def alternate(
         # Trim at the median residual of the mutual pairs (thesis: of all pairs). Outliers
         # are rarely mutual, so with many of them the median over all pairs is an
         # outlier's residual and would keep outlier pairs in the fit.
-        keep = mutual & (dist <= dist[mutual].median()) if bool(mutual.any()) else dist <= med
+        keep = mutual & (dist <= dist[mutual].median()) if bool(mutual.any()) else dist <= dist.median()
         # Pairs farther apart than `max_residual` (the inlier tolerance) are dropped too,
         # while at least a tenth of the points stay: at heavy outlier rates some outlier
-        # pairs pass the median and bias the plane by degrees.
-        tight = keep & (dist <= max_residual)
+        # pairs pass the median and bias the plane by degrees. The cut widens to 3x the
+        # lower quartile of the mutual residuals while the plane is still off: a cut below
+        # the surface pairs' own residuals keeps only pairs near the axis of the error,
+        # which hardly constrain it, and the alternation stalls short of the optimum.
+        if bool(mutual.any()):
+            lower = dist[mutual].kthvalue(max(1, int(0.25 * (int(mutual.sum()) - 1)) + 1)).values
+            cut = max(max_residual, 3.0 * float(lower))
+        else:
+            cut = max_residual
+        tight = keep & (dist <= cut)
         if int(tight.sum()) >= max(3, points.shape[0] // 10):
             keep = tight
         if int(keep.sum()) < 3:
-            keep = dist <= med
+            keep = dist <= dist.median()
         center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
         n_new, b_new = fit_pairs(points, nn_idx, keep, update, center)
         if float((n_new * normal).sum()) < 0:
@@ -196,6 +206,6 @@ def alternate(
             stalled += 1
             if stalled >= patience:
                 normal, offset, med = best
-                dist = None
+                dist, nn_idx = None, None
                 break
     return normal, offset, it, converged, med, dist, nn_idx
