@@ -74,9 +74,11 @@ class TestIntrinsicSymmetry:
         assert (out.map.numpy() == gt).mean() > 0.99
         with pytest.raises(InputValueError, match="refine_iters: expected an integer >= 0, got -1"):
             intrinsic_symmetry(mesh, refine_iters=-1)
-        with pytest.raises(InputValueError, match="refine_k: expected an integer >= 13, got 8"):
-            intrinsic_symmetry(mesh, refine_k=8)
-        thesis = intrinsic_symmetry(mesh, refine_iters=0, sign_hypotheses=0)  # the thesis's method
+        with pytest.raises(InputValueError, match="refine_k: expected an integer >= 1, got 0"):
+            intrinsic_symmetry(mesh, refine_k=0)
+        assert IntrinsicSymmetry(n_eigen=30, refine_iters=0).refine_k == 25  # below n_eigen: raised to it when used
+        # the thesis's method: no extension
+        thesis = intrinsic_symmetry(mesh, refine_iters=0, sign_hypotheses=0, pairing_hypotheses=False)
         assert "refine" not in thesis.timings and (thesis.map.numpy() == gt).mean() > 0.99
 
     def test_dropped_component(self, blob):

@@ -94,7 +94,8 @@ class IntrinsicSymmetryResult(Result):
         pairs: ``(P, 2)`` int64 sparse pairs of symmetric feature points (input indices).
         feature_points: ``(d,)`` int64 HKS feature points (input indices).
         timings: seconds per stage (``validate``, ``eigen``, ``features``, ``pairs``,
-            ``signs``, ``correction``, ``map``) and ``total``.
+            ``signs``, ``correction``, ``map``, summed over the pairing hypotheses, and
+            ``refine``) and ``total``.
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the component that was solved.
         correction_converged: whether every trust-region run stopped on its own tests
@@ -162,7 +163,8 @@ def map_quality(evecs: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> 
     ``C = Phi^T A Phi[T]`` (``Phi`` area-orthonormal eigenfunctions, ``A`` lumped areas) is
     orthogonal for an isometry and squares to the identity for an involution; the result is
     ``|C^T C - I|_F + |C C - I|_F``, 0 for an exact intrinsic symmetry. The identity map
-    scores 0 too, so callers must rule it out (a symmetry with pairs is never the identity).
+    scores 0 too, so callers must rule it out (:func:`intrinsic_symmetry` does: no odd
+    eigenfunction, or more than half the vertices fixed).
     """
     c = evecs.T @ (area[:, None] * evecs[vertex_map])  # (k, k)
     eye = np.eye(c.shape[0])
@@ -276,9 +278,9 @@ def intrinsic_symmetry(
         cross_pairs: also read signs from geodesics between two pairs
             (:func:`eigenfunction_signs`).
         sign_hypotheses: least-confident eigenfunctions whose both signs are tried (see
-            step 7; 0 is the thesis's rule). On FAUST (every 2nd shape) and TOSCA the
-            default 3 raised the correspondence rate from 93.3 % to 93.7 % and from 89.9 %
-            to 90.9 % (``benchmarks/bench_mesh.py``).
+            step 7; 0 is the thesis's rule). On FAUST and TOSCA (every 2nd shape,
+            ``benchmarks/bench_mesh.py``) the default 3 raised the correspondence rate from
+            93.3 % to 93.7 % and from 87.3 % to 88.6 %.
         pairing_hypotheses: also pair the feature points on HKS alone (``spectral_weight``
             0) and keep, of the two maps (after step 7), the one closer to an isometric
             involution (:func:`map_quality`; a pairing without pairs never wins). The
@@ -298,10 +300,12 @@ def intrinsic_symmetry(
             diagonal ``C`` in 13 eigenfunctions cannot follow shapes that are only nearly
             isometric (on FAUST the true ``C`` has mean ``|C_ii|`` 0.6-0.8); the free ``C``
             in a larger basis can. With the default 4 rounds to 25 eigenfunctions the
-            correspondence rate rose from 93.7 % to 95.1 % on FAUST and from 88.6 % to
-            91.4 % on TOSCA (every 2nd shape, ``benchmarks/bench_mesh.py``), for
+            correspondence rate rose from 93.7 % to 94.9 % on FAUST and from 88.6 % to
+            90.8 % on TOSCA (every 2nd shape, ``benchmarks/bench_mesh.py``), for
             ``refine_k - n_eigen`` more eigenpairs and a few nearest-neighbour searches.
-        refine_k: eigenfunctions of the last ZoomOut round.
+        refine_k: eigenfunctions of the last ZoomOut round (at least ``n_eigen``; also the
+            number of eigenpairs computed in step 2, so it changes the solver's basis
+            within repeated eigenvalues too).
         mu: weight of the pairing term of Eq. 6.4. The eigenvalue terms use the
             eigenvalues of the unit-area mesh divided by ``lambda_k``, so that the cost
             does not depend on scale; in these units 0.01 worked best on a development
@@ -325,7 +329,7 @@ def intrinsic_symmetry(
     max_pairs = check_int(max_pairs, "max_pairs", minimum=1)
     max_iter = check_int(max_iter, "max_iter", minimum=1)
     refine_iters = check_int(refine_iters, "refine_iters", minimum=0)
-    refine_k = check_int(refine_k, "refine_k", minimum=n_eigen) if refine_iters else n_eigen
+    refine_k = max(check_int(refine_k, "refine_k", minimum=1), n_eigen) if refine_iters else n_eigen
     sign_hypotheses = check_int(sign_hypotheses, "sign_hypotheses", minimum=0)
     if not isinstance(pairing_hypotheses, bool):
         raise InputValueError(f"pairing_hypotheses: expected True or False, got {pairing_hypotheses!r}")
@@ -370,13 +374,16 @@ def intrinsic_symmetry(
     desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))[features]  # (d, h)
     timings["features"], tic = time.perf_counter() - tic, time.perf_counter()
 
+    tic = time.perf_counter()
     feat_dist = geodesic_distances(graph, features)[:, features]  # (d, d)
     area = mass_matrix(v, f).diagonal()  # (V',)
+    t_shared = time.perf_counter() - tic  # counted with the pairs
     weights = [spectral_weight]
     if pairing_hypotheses and spectral_weight != 0.0:
         weights.append(0.0)
     for k_ in ("pairs", "signs", "correction", "map"):
         timings[k_] = 0.0
+    timings["pairs"] = t_shared
     candidates = []
     for weight in weights:
         cand_notes: list[str] = []
@@ -413,7 +420,11 @@ def intrinsic_symmetry(
             if q_chosen < q_thesis:
                 cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
         vmap = _dense_map(emb, signs)  # (V',)
-        quality = map_quality(evecs, area, vmap) if pairs.shape[0] else math.inf
+        # a map without an odd eigenfunction, or fixing most vertices, is (near) the
+        # identity, which map_quality scores as perfect: it never wins
+        fixed = float(np.mean(vmap == np.arange(vmap.shape[0])))
+        usable = pairs.shape[0] and bool((signs < 0).any()) and fixed < 0.5
+        quality = map_quality(evecs, area, vmap) if usable else math.inf
         timings["map"] += time.perf_counter() - tic
         candidates.append((quality, weight, pairs, signs, rotation, converged, vmap, cand_notes))
     best = min(range(len(candidates)), key=lambda i: candidates[i][0])  # ties: the first (the setting given)
@@ -509,7 +520,7 @@ class IntrinsicSymmetry(nn.Module):
         self.mu = check_positive(mu, "mu", allow_zero=True)
         self.max_iter = check_int(max_iter, "max_iter", minimum=1)
         self.refine_iters = check_int(refine_iters, "refine_iters", minimum=0)
-        self.refine_k = check_int(refine_k, "refine_k", minimum=self.n_eigen)
+        self.refine_k = check_int(refine_k, "refine_k", minimum=1)
         self.sign_hypotheses = check_int(sign_hypotheses, "sign_hypotheses", minimum=0)
         if components not in ("largest", "refuse"):
             raise InputValueError(f"components: expected 'largest' or 'refuse', got {components!r}")
