@@ -13,6 +13,7 @@ from torchsym.mesh.intrinsic import (
     intrinsic_symmetry,
     map_consistency,
     map_quality,
+    pointwise_to_functional,
     symmetry_colors,
 )
 from torchsym.mesh.mesh import Mesh
@@ -48,6 +49,7 @@ __all__ = [
     "intrinsic_symmetry",
     "map_consistency",
     "map_quality",
+    "pointwise_to_functional",
     "laplacian_eigen",
     "mass_matrix",
     "pair_affinity",

@@ -47,6 +47,7 @@ __all__ = [
     "intrinsic_symmetry",
     "map_consistency",
     "map_quality",
+    "pointwise_to_functional",
     "symmetry_colors",
 ]
 
@@ -157,6 +158,17 @@ def map_consistency(tree: cKDTree, emb: np.ndarray, signs: np.ndarray, rows: np.
     return float(np.linalg.norm(fitted - np.diag(signs)))
 
 
+def pointwise_to_functional(phi: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
+    """The functional map ``C = Phi^T A Phi[T]`` of a point map ``T`` in the basis ``Phi``.
+
+    ``Phi`` ``(V, k)`` holds area-orthonormal eigenfunctions and ``A`` the lumped areas
+    ``(V,)``; column ``j`` of ``C`` holds the coefficients of ``phi_j o T``, so that
+    ``Phi[T] ~ Phi C`` and ``T(i)`` is recovered as the row of ``Phi`` nearest to row ``i``
+    of ``Phi C`` (ZoomOut's two half-steps).
+    """
+    return phi.T @ (area[:, None] * phi[vertex_map])
+
+
 def map_quality(evecs: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> float:
     """How far a point map is from an isometric involution, seen through its functional map.
 
@@ -166,7 +178,7 @@ def map_quality(evecs: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> 
     scores 0 too, so callers must rule it out (:func:`intrinsic_symmetry` does: no odd
     eigenfunction, or more than half the vertices fixed).
     """
-    c = evecs.T @ (area[:, None] * evecs[vertex_map])  # (k, k)
+    c = pointwise_to_functional(evecs, area, vertex_map)  # (k, k)
     eye = np.eye(c.shape[0])
     return float(np.linalg.norm(c.T @ c - eye) + np.linalg.norm(c @ c - eye))
 
@@ -441,7 +453,7 @@ def intrinsic_symmetry(
         # ZoomOut: point map -> functional map in a larger basis -> point map
         for kk in np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:]:
             phi = big[:, :kk]  # (V', kk)
-            full = phi.T @ (area[:, None] * phi[vmap])  # (kk, kk): coefficients of f o T
+            full = pointwise_to_functional(phi, area, vmap)  # (kk, kk)
             vmap = cKDTree(phi).query(phi @ full, k=1)[1].astype(np.int64)
         timings["refine"] = time.perf_counter() - tic
 

@@ -87,6 +87,15 @@ def support(points, index, normal, offset, sigma: float):
     return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
 
 
+def _lower_quantile(values: torch.Tensor, q: float) -> torch.Tensor:
+    """The order statistic at quantile ``q`` of a 1-D tensor, rounded down (no interpolation).
+
+    ``kthvalue`` selects in linear time; ``torch.quantile`` sorts and refuses more than
+    2^24 values, which a polish on a large scan exceeds.
+    """
+    return values.kthvalue(max(1, int(q * (values.numel() - 1)) + 1)).values
+
+
 def fit_pairs(points: torch.Tensor, nn_idx: torch.Tensor, keep: torch.Tensor, update: str, center: torch.Tensor):
     """Refit the plane to the kept pairs ``(i, nn_idx[i])``."""
     p = points[keep]
@@ -145,8 +154,7 @@ def alternate(
 
     def evaluate(n_: torch.Tensor, b_: torch.Tensor):
         d_, j_ = index.query(reflect_points(points, n_, b_))
-        # kthvalue: torch.quantile sorts and refuses more than 2^24 values
-        return d_, j_, d_.kthvalue(max(1, int(PROGRESS_QUANTILE * (d_.numel() - 1)) + 1)).values
+        return d_, j_, _lower_quantile(d_, PROGRESS_QUANTILE)
 
     converged = False
     it = 0
@@ -166,7 +174,7 @@ def alternate(
         # the surface pairs' own residuals keeps only pairs near the axis of the error,
         # which hardly constrain it, and the alternation stalls short of the optimum.
         if bool(mutual.any()):
-            lower = dist[mutual].kthvalue(max(1, int(0.25 * (int(mutual.sum()) - 1)) + 1)).values
+            lower = _lower_quantile(dist[mutual], 0.25)
             cut = max(max_residual, 3.0 * float(lower))
         else:
             cut = max_residual
