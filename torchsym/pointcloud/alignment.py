@@ -144,8 +144,9 @@ def alternate(
     quantile of all residuals) keeps falling; an extrapolated step is taken only when it
     lowers that residual.
 
-    It ends when the normal moves less than ``tol_angle`` degrees and the offset less than
-    ``tol_offset`` (converged), or after ``patience`` steps without a lower progress
+    It ends when a step moves the normal less than ``tol_angle`` degrees and the offset
+    less than ``tol_offset`` (converged; that last step is taken, and the residuals
+    returned are those it was fitted from), or after ``patience`` steps without a lower progress
     residual (not converged; the best plane seen is returned).
 
     Returns ``(normal, offset, iterations, converged, progress residual, residuals,
@@ -187,6 +188,13 @@ def alternate(
         n_new, b_new = fit_pairs(points, nn_idx, keep, update, center)
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
+        d_angle = float(plane_angle(n_new, normal)) * 180.0 / math.pi
+        d_off = float((b_new - offset).abs())
+        if d_angle < tol_angle and d_off < tol_offset:
+            # Converged: the step moved the plane less than the tolerances. The residuals
+            # and neighbours returned are those of the previous plane (they moved by at
+            # most the tolerances): one full nearest-neighbour query saved per run.
+            return n_new, b_new, it, True, med, dist, nn_idx
         d_new, j_new, m_new = evaluate(n_new, b_new)
         if accelerate and float(plane_angle(n_new, normal)) * 180.0 / math.pi > 50 * tol_angle:
             dn, db = n_new - normal, b_new - offset
@@ -200,12 +208,7 @@ def alternate(
                     break
                 n_new, b_new, d_new, j_new, m_new = n_try, b_try, d_try, j_try, m_try
                 alpha *= 2.0
-        d_angle = float(plane_angle(n_new, normal)) * 180.0 / math.pi
-        d_off = float((b_new - offset).abs())
         normal, offset, dist, nn_idx, med = n_new, b_new, d_new, j_new, m_new
-        if d_angle < tol_angle and d_off < tol_offset:
-            converged = True
-            break
         # With outliers or noise the trimmed set can wander without settling: stop after
         # `patience` steps that do not lower the progress residual, keeping the best plane.
         if bool(med < best[2]):

@@ -190,12 +190,15 @@ def _dominant(supports: list[float]) -> bool:
     return best >= DOMINANCE * middle and best - middle >= DOMINANCE_GAP
 
 
-def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float = 0.5) -> float:
+def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float | tuple[float, ...] = 0.5):
     """Quantile ``q`` of the distance from a point to its nearest other point, on up to
-    1,000 random points. A low quantile measures the densest part, the sampled surface,
-    even when outliers (which are sparser) are most of the cloud."""
+    1,000 random points (a tuple of quantiles gives a tuple, from one query). A low
+    quantile measures the densest part, the sampled surface, even when outliers (which
+    are sparser) are most of the cloud."""
     probe = points[random_subset(points.shape[0], 1000, gen)]
     d, _ = index.query(probe, k=2)
+    if isinstance(q, tuple):
+        return tuple(float(v) for v in d[:, 1].quantile(torch.tensor(q, dtype=d.dtype)))
     return float(d[:, 1].quantile(q))
 
 
@@ -446,16 +449,18 @@ def detect_reflection_plane(
     # Algorithm 6 from the winner, to the thesis's tolerances, on up to n_polish_samples.
     final = None
     full_index = KNNIndex(xs) if sub is not xs else sub_index
+    full_spacing = None
     if polish:
         if n > n_polish_samples:
             pol = xs[random_subset(n, n_polish_samples, gen)]
             pol_index = KNNIndex(pol)
+            pol_spacing = _spacing(pol, pol_index, gen, q=SPACING_QUANTILE)
         else:
             pol, pol_index = xs, full_index
+            pol_spacing, full_spacing = _spacing(xs, full_index, gen, q=(SPACING_QUANTILE, 0.5))
         normal, offset, it2, converged, _, pdist, pnn = alternate(
             pol, pol_index, normal, offset, update=update, max_iter=max_iter, tol_angle=tol_angle, tol_offset=tol_offset,
-            accelerate=accelerate,
-            max_residual=inlier_factor * _spacing(pol, pol_index, gen, q=SPACING_QUANTILE),
+            accelerate=accelerate, max_residual=inlier_factor * pol_spacing,
         )
         iters += it2
         if pol is xs and pdist is not None:
@@ -463,7 +468,9 @@ def detect_reflection_plane(
     if final is None:
         final = full_index.query(reflect_points(xs, normal, offset))
     dist, nn_idx = final
-    tol = inlier_factor * max(_spacing(xs, full_index, gen), 1e-12)
+    if full_spacing is None:
+        full_spacing = _spacing(xs, full_index, gen)
+    tol = inlier_factor * max(full_spacing, 1e-12)
     inliers = dist <= tol
     mutual = mutual_nearest(nn_idx, nn_idx)
     idx = torch.arange(n)
