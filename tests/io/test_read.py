@@ -6,7 +6,9 @@ import torch
 
 import torchsym
 from torchsym.errors import InputFileError
-from torchsym.io import infer_kind, load_input, read_image, read_mesh, read_pointcloud, write_image, write_ply
+from torchsym.errors import InputShapeError
+from torchsym.io import infer_kind, load_input, read_image, read_mesh, read_pointcloud, write_image, write_mesh, write_ply
+from torchsym.mesh import Mesh
 
 
 def _gen(seed: int = 0) -> torch.Generator:
@@ -90,3 +92,35 @@ class TestRead:
         np.savetxt(tmp_path / "p.xyz", np.ones((5, 3)))
         with pytest.raises(InputFileError, match="holds a pointcloud, but kind 'mesh' was asked for"):
             load_input(tmp_path / "p.xyz", kind="mesh")
+
+
+class TestWriteMesh:
+    @pytest.mark.parametrize("suffix", [".ply", ".obj", ".off", ".stl"])
+    def test_round_trip(self, tmp_path, suffix):
+        v = torch.rand(4, 3, generator=_gen(), dtype=torch.float64)
+        mesh = Mesh(v, torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        out = write_mesh(tmp_path / f"sub/m{suffix}", mesh, colors=torch.rand(4, 3, generator=_gen(1)))
+        back = read_mesh(out, dtype=torch.float64)
+        assert back.num_faces == 2 and back.num_vertices == 4
+        if suffix != ".stl":  # STL stores triangles only: vertex order is not kept
+            assert torch.allclose(back.vertices, v, atol=1e-5) and torch.equal(back.faces, mesh.faces)
+
+    def test_colors_kept_in_ply(self, tmp_path):
+        import pymeshlab
+
+        mesh = Mesh(torch.rand(4, 3, generator=_gen()), torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        colors = torch.tensor([[255, 0, 0], [0, 255, 0], [0, 0, 255], [10, 20, 30]], dtype=torch.uint8)
+        write_mesh(tmp_path / "c.ply", mesh, colors=colors)
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(tmp_path / "c.ply"))
+        got = np.round(ms.current_mesh().vertex_color_matrix()[:, :3] * 255).astype(int)
+        assert got.tolist() == colors.tolist()
+
+    def test_exception(self, tmp_path):
+        mesh = Mesh(torch.rand(4, 3, generator=_gen()), torch.tensor([[0, 1, 2], [0, 2, 3]]))
+        with pytest.raises(InputFileError, match=r"path: expected one of .ply, .obj, .off, .stl to write a mesh"):
+            write_mesh(tmp_path / "m.xyz", mesh)
+        with pytest.raises(InputShapeError, match=r"mesh: expected a torchsym.mesh.Mesh, got Tensor"):
+            write_mesh(tmp_path / "m.ply", mesh.vertices)
+        with pytest.raises(InputShapeError, match=r"colors: expected \(4, 3\) per-vertex RGB, got \(3, 3\)"):
+            write_mesh(tmp_path / "m.ply", mesh, colors=torch.rand(3, 3))

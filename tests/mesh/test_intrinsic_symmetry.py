@@ -38,6 +38,26 @@ class TestIntrinsicSymmetry:
         r = result.rotation
         torch.testing.assert_close(r.T @ r, torch.eye(13, dtype=r.dtype), atol=1e-8, rtol=0)
 
+    def test_map_from_refined_functional_map(self, solved):
+        # the returned map is the nearest row of Phi to each row of Phi C_r (ZoomOut's last round)
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh import laplacian_eigen
+
+        result, mesh, gt = solved
+        c = result.refined_functional_map.numpy()
+        assert c.shape == (25, 25)
+        v = mesh.vertices.double().numpy()
+        _, phi = laplacian_eigen(v, mesh.faces.numpy(), 25)
+        again = cKDTree(phi).query(phi @ c, k=1)[1]
+        assert (again == result.map.numpy()).mean() > 0.99
+        assert (result.map_before_refine.numpy() == gt).mean() > 0.95
+
+    def test_no_refine(self, blob):
+        mesh, _ = blob
+        out = intrinsic_symmetry(mesh, refine_iters=0)
+        assert torch.equal(out.map, out.map_before_refine) and out.refined_functional_map.shape == (0, 0)
+
     def test_rigid_motion(self, solved, rigid_motion):
         result, mesh, _ = solved
         rot, shift = rigid_motion

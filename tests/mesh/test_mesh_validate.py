@@ -26,6 +26,24 @@ class TestValidateMesh:
         with pytest.raises(InputValueError, match=r"mesh.faces: expected at least one triangle, got \(0, 3\).*point cloud"):
             validate_mesh(mesh)
 
+    def test_out_of_range_faces(self):
+        v, f = tetra()
+        with pytest.raises(InputValueError, match=r"faces: expected indices in \[0, 3\], got values in \[0, 4\]"):
+            Mesh.create(v, np.vstack([f, [[1, 2, 4]]]))
+        with pytest.raises(InputValueError, match=r"faces: expected indices in \[0, 3\], got values in \[-1, 3\]"):
+            Mesh.create(v, np.vstack([f, [[-1, 2, 3]]]))
+
+    def test_empty_vertices(self):
+        with pytest.raises(InputValueError, match=r"vertices: expected at least one vertex, got \(0, 3\)"):
+            Mesh.create(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+
+    def test_wrong_shapes(self):
+        v, f = tetra()
+        with pytest.raises(InputShapeError, match=r"vertices: expected \(V, 3\) float tensor, got \(4, 2\)"):
+            Mesh.create(v[:, :2], f)
+        with pytest.raises(InputShapeError, match=r"faces: expected integer vertex indices, got non-integer values"):
+            Mesh.create(v, f + 0.5)
+
     def test_repeated_vertex(self):
         v, f = tetra()
         f = np.concatenate([f, [[1, 1, 2]]])

@@ -10,7 +10,7 @@ from torchsym.io.read import (
     read_mesh,
     read_pointcloud,
 )
-from torchsym.io.write import write_image, write_json, write_ply
+from torchsym.io.write import write_image, write_json, write_mesh, write_ply
 
 __all__ = [
     "IMAGE_SUFFIXES",
@@ -23,5 +23,6 @@ __all__ = [
     "read_pointcloud",
     "write_image",
     "write_json",
+    "write_mesh",
     "write_ply",
 ]

@@ -12,7 +12,9 @@ import torch
 from torchsym.core.results import to_jsonable
 from torchsym.errors import InputFileError
 
-__all__ = ["write_image", "write_json", "write_ply"]
+__all__ = ["write_image", "write_json", "write_mesh", "write_ply"]
+
+MESH_WRITE_SUFFIXES = (".ply", ".obj", ".off", ".stl")
 
 
 def write_json(obj: Any, path: str | Path) -> Path:
@@ -77,6 +79,53 @@ def write_ply(
         fh.write(("\n".join(header) + "\n").encode("ascii"))
         for b in blobs:
             fh.write(b)
+    return p
+
+
+def write_mesh(path: str | Path, mesh: Any, *, colors: Any | None = None) -> Path:
+    """Write a triangle mesh through pymeshlab (``.ply`` binary, ``.obj``, ``.off``, ``.stl``).
+
+    Args:
+        path: output file; its suffix picks the format. Its folder is created.
+        mesh: a :class:`torchsym.mesh.Mesh`.
+        colors: ``(V, 3)`` per-vertex RGB in [0, 1] or uint8, optional (kept by PLY, OFF
+            and OBJ; STL has no vertex colours).
+
+    Raises:
+        InputFileError: an unsupported suffix, or pymeshlab cannot write the file.
+        InputShapeError: ``mesh`` is not a Mesh, or ``colors`` is not ``(V, 3)``.
+    """
+    import pymeshlab
+
+    from torchsym.errors import InputShapeError
+    from torchsym.mesh.mesh import Mesh
+
+    if not isinstance(mesh, Mesh):
+        raise InputShapeError(f"mesh: expected a torchsym.mesh.Mesh, got {type(mesh).__name__}")
+    p = Path(path)
+    if p.suffix.lower() not in MESH_WRITE_SUFFIXES:
+        raise InputFileError(f"path: expected one of {', '.join(MESH_WRITE_SUFFIXES)} to write a mesh, got {str(p)!r}")
+    v = _np(mesh.vertices).astype(np.float64)
+    f = _np(mesh.faces).astype(np.int32)
+    kwargs: dict[str, Any] = {"vertex_matrix": v, "face_matrix": f}
+    if colors is not None:
+        c = _np(colors)
+        if c.shape != (v.shape[0], 3):
+            raise InputShapeError(f"colors: expected ({v.shape[0]}, 3) per-vertex RGB, got {tuple(c.shape)}")
+        c = c.astype(np.float64) / 255.0 if c.dtype == np.uint8 else np.clip(c.astype(np.float64), 0.0, 1.0)
+        kwargs["v_color_matrix"] = np.concatenate([c, np.ones((c.shape[0], 1))], axis=1)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(**kwargs))
+    p.parent.mkdir(parents=True, exist_ok=True)
+    save: dict[str, Any] = {}
+    if p.suffix.lower() == ".ply":
+        save = {"binary": True, "save_vertex_color": colors is not None}
+    elif p.suffix.lower() in (".off", ".obj"):
+        save = {"save_vertex_color": colors is not None}
+    try:
+        ms.save_current_mesh(str(p), **save)
+    except pymeshlab.PyMeshLabException as exc:
+        raise InputFileError(f"path: cannot write a mesh to {str(p)!r} ({exc})") from None
     return p
 
 

@@ -91,6 +91,13 @@ class IntrinsicSymmetryResult(Result):
             ``refine_iters`` rounds, which work in a larger basis).
         rotation: ``(k, k)`` the eigenfunction correction ``R`` in SO(k) (identity when
             the correction is off).
+        map_before_refine: ``(V,)`` int64, the thesis's dense map (Sec. 6.2.7) from ``C``
+            and ``R``, before the ZoomOut rounds (equal to ``map`` when
+            ``refine_iters == 0``); input order, ``-1`` for dropped vertices.
+        refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
+            round in the first ``k_r = refine_k`` Laplace-Beltrami eigenfunctions ``Phi``
+            of the solved component: ``map`` is the nearest row of ``Phi`` to each row of
+            ``Phi C_r``. ``(0, 0)`` when ``refine_iters == 0``.
         eigenvalues: ``(k,)`` Laplace-Beltrami eigenvalues of the mesh scaled to unit area.
         pairs: ``(P, 2)`` int64 sparse pairs of symmetric feature points (input indices).
         feature_points: ``(d,)`` int64 HKS feature points (input indices).
@@ -107,6 +114,8 @@ class IntrinsicSymmetryResult(Result):
     map: torch.Tensor
     functional_map: torch.Tensor
     rotation: torch.Tensor
+    map_before_refine: torch.Tensor
+    refined_functional_map: torch.Tensor
     eigenvalues: torch.Tensor
     pairs: torch.Tensor
     feature_points: torch.Tensor
@@ -118,7 +127,7 @@ class IntrinsicSymmetryResult(Result):
 
     def write_artifacts(self, data: Any, out_dir: Path, stem: str) -> list[Path]:
         """Write ``{stem}_symmetry.ply`` (symmetric vertices share a colour) and ``{stem}_map.npy``."""
-        from torchsym.io.write import write_ply
+        from torchsym.io.write import write_mesh
 
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -127,7 +136,7 @@ class IntrinsicSymmetryResult(Result):
         if isinstance(data, Mesh):
             verts = data.vertices.detach().cpu().double().numpy()
             colors = symmetry_colors(verts, vmap)
-            paths.append(write_ply(out_dir / f"{stem}_symmetry.ply", verts, colors=colors, faces=data.faces))
+            paths.append(write_mesh(out_dir / f"{stem}_symmetry.ply", data, colors=colors))
         npy = out_dir / f"{stem}_map.npy"
         np.save(npy, vmap)
         paths.append(npy)
@@ -449,6 +458,8 @@ def intrinsic_symmetry(
         )
     tic = time.perf_counter()
 
+    coarse_map = vmap
+    full = np.zeros((0, 0))
     if refine_iters:
         # ZoomOut: point map -> functional map in a larger basis -> point map
         for kk in np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:]:
@@ -464,6 +475,8 @@ def intrinsic_symmetry(
         map=checked.map_to_input(torch.from_numpy(vmap)),
         functional_map=torch.diag(torch.from_numpy(signs)),
         rotation=torch.from_numpy(rotation),
+        map_before_refine=checked.map_to_input(torch.from_numpy(coarse_map)),
+        refined_functional_map=torch.from_numpy(np.ascontiguousarray(full)),
         eigenvalues=torch.from_numpy(evals),
         pairs=torch.from_numpy(to_input[pairs]),
         feature_points=torch.from_numpy(to_input[features]),
