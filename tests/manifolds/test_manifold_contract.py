@@ -27,6 +27,8 @@ MANIFOLDS = {
     "so2": SpecialOrthogonal(2),
     "stiefel-qr": Stiefel(5, 2),
     "stiefel-polar": Stiefel(4, 3, "polar"),
+    "stiefel-cayley": Stiefel(6, 2, "cayley"),
+    "stiefel-exp": Stiefel(5, 3, "exp"),
     "sphere": Stiefel(4, 1),
     "plane": PlaneRotations(4, (1, 3)),
     "euclid": Euclidean(3),

@@ -61,29 +61,41 @@ class TestPointSymm:
         assert torch.allclose(refl @ res.normal, -res.normal, atol=1e-10)
         assert abs(float(res.normal @ res.translation + res.offset)) < 1e-10
 
-    def test_rigid_motion_invariance(self):
-        s = planted(50, 3, 2)
-        q = SpecialOrthogonal(3).random_point(generator=gen(3))
-        shift = torch.tensor([2.0, -1.0, 0.5], dtype=DT)
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_rigid_motion_invariance(self, d):
+        s = planted(50, d, 2)
+        q = SpecialOrthogonal(d).random_point(generator=gen(3))
+        shift = torch.linspace(-1.0, 2.0, d, dtype=DT)
         moved = s.points @ q.T + shift
         a, b = point_symm(s.points), point_symm(moved)
         assert float(plane_angle(b.normal, q @ a.normal)) < 1e-8
         assert torch.equal(a.permutation, b.permutation)
 
-    def test_permutation_invariance(self):
-        s = planted(50, 3, 4)
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_permutation_invariance(self, d):
+        s = planted(50, d, 4)
         order = torch.randperm(50, generator=gen(5))
         a, b = point_symm(s.points), point_symm(s.points[order])
         assert float(plane_angle(a.normal, b.normal)) < 1e-8
         # b's mirror of point k is the mirror of point order[k] in a
         assert torch.equal(order[b.permutation], a.permutation[order])
 
-    def test_seeded_determinism(self):
-        s = planted(40, 3, 6, sigma2=0.001)
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_seeded_determinism(self, d):
+        s = planted(40, d, 6, sigma2=0.001)
         a = point_symm(s.points, generator=gen(7))
         b = point_symm(s.points, generator=gen(7))
         assert torch.equal(a.normal, b.normal) and torch.equal(a.offset, b.offset)
         assert torch.equal(a.permutation, b.permutation) and a.score == b.score
+
+    def test_thesis_initialisation(self):
+        # Sec. 7.2.4 as written: without noise in 6-D the first passing pairs are true pairs
+        s = planted(60, 6, 11)
+        res = point_symm(s.points, init="thesis")
+        assert math.degrees(float(plane_angle(res.normal, s.normal))) < 1e-6
+        assert torch.equal(res.permutation, s.correspondence)
+        again = point_symm(s.points, init="thesis")
+        assert torch.equal(res.normal, again.normal)
 
     def test_small_noise(self):
         s = planted(60, 3, 8, sigma2=1e-6)
@@ -183,6 +195,8 @@ class TestPointSymm:
             point_symm(pts, assignment="lp")
         with pytest.raises(InputValueError, match="match_fraction"):
             point_symm(pts, match_fraction=1.5)
+        with pytest.raises(InputValueError, match="init: expected one of 'search', 'thesis', got 'random'"):
+            point_symm(pts, init="random")
 
 
 class TestPointSymmModule:

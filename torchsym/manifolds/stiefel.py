@@ -13,7 +13,7 @@ from torchsym.manifolds.base import Manifold, _float_tol
 
 __all__ = ["Stiefel"]
 
-_RETRACTIONS = ("qr", "polar")
+_RETRACTIONS = ("qr", "cayley", "polar", "exp")
 
 
 class Stiefel(Manifold):
@@ -26,8 +26,12 @@ class Stiefel(Manifold):
     Args:
         n: number of rows.
         p: number of columns, ``1 <= p <= n``.
-        retraction: ``"qr"`` (Q factor of ``X + U`` with positive ``diag(R)``) or
-            ``"polar"`` (orthogonal polar factor of ``X + U``).
+        retraction: ``"qr"`` (Q factor of ``X + U`` with positive ``diag(R)``),
+            ``"cayley"`` (``(I - W/2)^{-1} (I + W/2) X`` with the skew
+            ``W = P U X^T - X U^T P``, ``P = I - X X^T / 2``, Wen and Yin 2013; computed
+            through the Woodbury identity with a ``2p x 2p`` solve, so ``O(n p^2)``),
+            ``"polar"`` (orthogonal polar factor of ``X + U``) or ``"exp"`` (the
+            geodesic, :meth:`expmap`; a ``2p x 2p`` matrix exponential).
     """
 
     name = "Stiefel"
@@ -64,7 +68,21 @@ class Stiefel(Manifold):
     def retr(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         if self.retraction == "polar":
             return polar(x + u)
+        if self.retraction == "cayley":
+            return self._cayley(x, u)
+        if self.retraction == "exp":
+            return self.expmap(x, u)
         return qr_unique(x + u)
+
+    def _cayley(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
+        # W = A B^T with A = [P U, X], B = [X, -P U]; (I - W/2)^{-1} (I + W/2) X
+        # = X + A (I - B^T A / 2)^{-1} B^T X (Woodbury).
+        pu = u - 0.5 * x @ (x.transpose(-1, -2) @ u)
+        a = torch.cat([pu, x], -1)  # (..., n, 2p)
+        b = torch.cat([x, -pu], -1)
+        eye = torch.eye(2 * self.p, dtype=x.dtype, device=x.device)
+        btx = b.transpose(-1, -2) @ x  # (..., 2p, p)
+        return x + a @ torch.linalg.solve(eye - 0.5 * b.transpose(-1, -2) @ a, btx)
 
     def expmap(self, x: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
         """The geodesic of the embedded metric (Edelman, Arias & Smith 1998, Eq. 2.14)."""

@@ -20,6 +20,9 @@ What the thesis leaves open, and what we add so that the search survives mild no
   the tests, so every ``(i, j)`` is a candidate; a pair that passed is kept unless another
   candidate verifies more than twice as well.
 
+:func:`thesis_pair_search` is the search exactly as Sec. 7.2.4 states it, for comparison
+(``point_symm(..., init="thesis")``).
+
 Each run gives one polished plane; the robust median of the ``n_runs`` planes (and of their
 points) starts the alternation. On the synthetic sets of Sec. 7.4.2 (``n = 300``, 3-D) this
 start is good enough up to noise of standard deviation about 0.03 (``sigma^2 = 1e-3``); at
@@ -37,7 +40,7 @@ from scipy.spatial import cKDTree
 
 from torchsym.geometry.reflection import plane_from_pairs
 
-__all__ = ["pair_search"]
+__all__ = ["pair_search", "thesis_pair_search"]
 
 
 def _bisector(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -230,3 +233,77 @@ def pair_search(
     # plane whose offset is the median of the midpoints' offsets.
     point = point - (point @ normal - np.median(mid[agree] @ normal)) * normal
     return normal, point, nrm, mid, np.asarray(errors), found
+
+
+def thesis_pair_search(
+    x: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    n_runs: int = 10,
+    eps_theta: float = math.radians(2.0),
+    eps_d: float = 0.05,
+    chunk: int = 64,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """The randomised pair search of Sec. 7.2.4 as the thesis states it.
+
+    Each run draws ``x_p, x_q``; for each ``x_i`` (in random order) it draws ``x_j`` at random
+    without replacement until the bisecting planes of ``(x_p, x_i)`` and ``(x_q, x_j)`` pass the
+    two tests (angle ``<= eps_theta``, distance ratio ``>= 1 - eps_d``), and keeps the first
+    such two pairs. Drawing ``j`` without replacement until a pass is the same as taking the
+    first passing ``j`` of a random permutation, which is how it is computed here, ``chunk``
+    values of ``i`` at a time. The 2 pairs of each of the ``n_runs`` runs give 20 candidate
+    planes (the bisectors of the pairs); the start is their median plane: the componentwise
+    median of the normals, signs aligned with the normal nearest to the others, and the
+    median of the pairs' midpoints as the point ``t``.
+
+    Returns:
+        ``normal (D,)``, ``point (D,)``, the candidate ``normals (K, D)`` and midpoints
+        ``(K, D)`` (``K = 2 x`` the runs that found a pair), and the number of such runs.
+        When no run finds a pair, the bisectors of the runs' ``(x_p, x_q)`` are used.
+    """
+    n = x.shape[0]
+    normals: list[np.ndarray] = []
+    mids: list[np.ndarray] = []
+    fallback: list[tuple[np.ndarray, np.ndarray]] = []
+    found = 0
+    for _ in range(n_runs):
+        p, q = (int(v) for v in rng.choice(n, size=2, replace=False))
+        nrm_pq, _, mid_pq = _bisector(x[p][None], x[q][None])
+        fallback.append((nrm_pq[0], mid_pq[0]))
+        others = np.setdiff1d(np.arange(n), [p, q])
+        order_i = rng.permutation(others)
+        order_j = rng.permutation(others)
+        if others.size == 0:
+            continue
+        n_qj, c_qj, mid_qj = _bisector(x[q][None], x[order_j])  # (M, D) in draw order
+        hit = None
+        for start in range(0, order_i.size, chunk):
+            ii = order_i[start : start + chunk]
+            n_pi, c_pi, mid_pi = _bisector(x[p][None], x[ii])  # (m, D)
+            cos = np.abs(n_pi @ n_qj.T)  # (m, M)
+            d_q = np.abs(n_pi @ x[q] - c_pi)[:, None]  # (m, 1)
+            d_j = np.abs(n_pi @ x[order_j].T - c_pi[:, None])  # (m, M)
+            ratio = np.minimum(d_q, d_j) / np.maximum(np.maximum(d_q, d_j), 1e-300)
+            ok = (np.arccos(np.clip(cos, 0.0, 1.0)) <= eps_theta) & (ratio >= 1.0 - eps_d)
+            ok &= ii[:, None] != order_j[None, :]
+            rows = np.nonzero(ok.any(1))[0]
+            if rows.size:
+                r = int(rows[0])
+                c = int(np.argmax(ok[r]))
+                hit = (n_pi[r], mid_pi[r], n_qj[c], mid_qj[c])
+                break
+        if hit is None:
+            continue
+        found += 1
+        normals += [hit[0], hit[2]]
+        mids += [hit[1], hit[3]]
+    if not normals:
+        normals = [f[0] for f in fallback]
+        mids = [f[1] for f in fallback]
+    nrm, mid = np.stack(normals), np.stack(mids)
+    medoid = nrm[int(np.argmax(np.abs(nrm @ nrm.T).sum(1)))]
+    nrm = nrm * np.where(nrm @ medoid < 0, -1.0, 1.0)[:, None]
+    normal = np.median(nrm, axis=0)
+    norm = np.linalg.norm(normal)
+    normal = medoid if norm < 1e-12 else normal / norm
+    return normal, np.median(mid, axis=0), nrm, mid, found

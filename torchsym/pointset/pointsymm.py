@@ -21,7 +21,7 @@ from torchsym.errors import InputValueError
 from torchsym.optim import trust_region
 from torchsym.pointset import transform as tf
 from torchsym.pointset.assignment import mirror_assignment
-from torchsym.pointset.initialization import pair_search
+from torchsym.pointset.initialization import pair_search, thesis_pair_search
 
 __all__ = ["PointSymm", "PointSymmResult", "point_symm"]
 
@@ -67,6 +67,9 @@ class PointSymmResult(Result):
     assignment: str
 
 
+_INITS = ("search", "thesis")
+
+
 def _check_settings(
     n_runs: Any,
     eps_theta: Any,
@@ -77,7 +80,10 @@ def _check_settings(
     n_neighbors: Any,
     exact_max_points: Any,
     n_starts: Any,
+    init: Any = "search",
 ) -> None:
+    if init not in _INITS:
+        raise InputValueError(f"init: expected one of {', '.join(map(repr, _INITS))}, got {init!r}")
     check_int(n_runs, "n_runs", minimum=1)
     check_in_range(eps_theta, "eps_theta", 0.0, 90.0)
     check_in_range(eps_d, "eps_d", 0.0, 1.0)
@@ -179,6 +185,7 @@ def point_symm(
     n_neighbors: int = 10,
     exact_max_points: int = 2000,
     n_starts: int = 4,
+    init: str = "search",
     initial: tuple[Any, Any] | None = None,
     generator: torch.Generator | None = None,
 ) -> PointSymmResult:
@@ -232,6 +239,10 @@ def point_symm(
             plane (``n_starts=1``); the default 4 makes the search far less likely to end in
             a wrong plane under noise (at ``sigma^2 = 1e-3``, 2 failures in 15 sets instead
             of 7 on the sets of ``benchmarks/bench_pointset.py``).
+        init: ``"search"`` (the search above) or ``"thesis"``: Sec. 7.2.4 word for word
+            (:func:`torchsym.pointset.initialization.thesis_pair_search`: the first two
+            pairs of each run that pass the tests, the median of the 20 planes, one start;
+            ``n_starts`` is then unused).
         initial: ``(normal (D,), offset ())`` of a hyperplane ``normal . x + offset = 0`` to
             start the alternation from instead of the pair search (a warm start, e.g. from
             a previous frame or a learned predictor); None runs the search.
@@ -253,7 +264,7 @@ def point_symm(
         ([1.0, 0.0, 0.0], True)
     """
     pts = check_points(points, "points", min_dim=2, min_points=2)
-    _check_settings(n_runs, eps_theta, eps_d, max_iter, match_fraction, assignment, n_neighbors, exact_max_points, n_starts)
+    _check_settings(n_runs, eps_theta, eps_d, max_iter, match_fraction, assignment, n_neighbors, exact_max_points, n_starts, init)
     out_dtype, device = pts.dtype, pts.device
     x_raw = pts.detach().to("cpu", torch.float64).numpy()
     n, d = x_raw.shape
@@ -266,7 +277,11 @@ def point_symm(
     tree = cKDTree(xn)
 
     # Initialisation (Sec. 7.2.4), or the caller's plane.
-    if initial is None:
+    if initial is None and init == "thesis":
+        normal0, t0, _, _, found = thesis_pair_search(xn, rng, n_runs=n_runs, eps_theta=math.radians(eps_theta), eps_d=eps_d)
+        logger.debug("thesis pair search: %d of %d runs found two pairs within the tolerances", found, n_runs)
+        starts = [(normal0, t0)]
+    elif initial is None:
         normal0, t0, run_normals, run_points, run_errors, found = pair_search(
             xn, rng, n_runs=n_runs, eps_theta=math.radians(eps_theta), eps_d=eps_d, tree=tree
         )
@@ -353,10 +368,12 @@ class PointSymm(nn.Module):
         n_neighbors: int = 10,
         exact_max_points: int = 2000,
         n_starts: int = 4,
+        init: str = "search",
         seed: int = DEFAULT_SEED,
     ) -> None:
         super().__init__()
-        _check_settings(n_runs, eps_theta, eps_d, max_iter, match_fraction, assignment, n_neighbors, exact_max_points, n_starts)
+        _check_settings(n_runs, eps_theta, eps_d, max_iter, match_fraction, assignment, n_neighbors, exact_max_points, n_starts, init)
+        self.init = init
         self.n_runs, self.eps_theta, self.eps_d, self.max_iter = n_runs, eps_theta, eps_d, max_iter
         self.match_fraction, self.assignment = match_fraction, assignment
         self.n_neighbors, self.exact_max_points, self.n_starts = n_neighbors, exact_max_points, n_starts
@@ -374,6 +391,7 @@ class PointSymm(nn.Module):
             "n_neighbors": self.n_neighbors,
             "exact_max_points": self.exact_max_points,
             "n_starts": self.n_starts,
+            "init": self.init,
         }
 
     def forward(
