@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import math
 import statistics
+import sys
 import time
-
 
 __all__ = ["quick_pointcloud_benchmark"]
 
@@ -19,12 +19,14 @@ def quick_pointcloud_benchmark(n: int = 30000, repeats: int = 5) -> list[dict[st
 
     Prints a table and returns its rows.
     """
+    from tqdm import tqdm
+
     from torchsym.geometry import plane_angle
     from torchsym.matching import KNNIndex
     from torchsym.pointcloud import detect_reflection_plane, planted_symmetric_cloud
 
     rows = []
-    for seed in range(repeats):
+    for seed in tqdm(range(repeats), desc=f"bench {n} points", unit="cloud", file=sys.stderr, leave=False):
         cloud = planted_symmetric_cloud(n, generator=seed)
         t0 = time.perf_counter()
         res = detect_reflection_plane(cloud.points)

@@ -50,7 +50,7 @@ def _expand(inputs: Sequence[str]) -> list[Path]:
 
 def _summary(result: Any) -> str:
     d = result.to_dict()
-    keys = [k for k in ("normal", "offset", "score", "scores", "axes", "converged", "iterations") if k in d]
+    keys = [k for k in ("normal", "offset", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
     parts = []
     for k in keys:
         v = d[k]
@@ -64,15 +64,29 @@ def _summary(result: Any) -> str:
     return f"{d['type']}: " + ", ".join(parts)
 
 
-def _run_one(path: Path | Any, stem: str, args: argparse.Namespace, overrides: dict[str, Any]) -> dict[str, Any]:
+def _run_one(
+    path: Path | Any, stem: str, args: argparse.Namespace, overrides: dict[str, Any], bar: Any = None
+) -> dict[str, Any]:
+    """Read, solve, write one input; ``bar`` (a tqdm bar, optional) advances one step per stage."""
     from torchsym.api import prepare
     from torchsym.core.config import build_pipeline
 
+    def stage(name: str) -> None:
+        if bar is not None:
+            bar.set_description_str(f"{stem}: {name}")
+
+    stage("reading")
     kind, data, cfg = prepare(path, args.config, kind=args.kind)
     pipeline = build_pipeline(cfg, **overrides)
+    if bar is not None:
+        bar.update(1)
+    stage(f"solving ({kind})")
     t0 = time.perf_counter()
     result = pipeline(data)
     seconds = time.perf_counter() - t0
+    if bar is not None:
+        bar.update(1)
+    stage("writing")
     record = {"input": str(path) if isinstance(path, Path) else stem, "kind": kind, "config": pipeline.config.to_dict(),
               "seconds": seconds, "result": result.to_dict()}
     written: list[str] = []
@@ -85,6 +99,9 @@ def _run_one(path: Path | Any, stem: str, args: argparse.Namespace, overrides: d
         record["artifacts"] = written
         json_path.write_text(json.dumps(record, indent=2))
         written.insert(0, str(json_path))
+    if bar is not None:
+        bar.update(1)
+        bar.clear()
     print(f"{stem}: {_summary(result)} ({seconds:.3f} s)")
     for w in written:
         print(f"  wrote {w}")
@@ -102,15 +119,19 @@ def _cmd_detect(args: argparse.Namespace) -> int:
         print("torchsym detect: no inputs found", file=sys.stderr)
         return 2
     failures = 0
-    bar = tqdm(paths, desc="detect", unit="input", disable=len(paths) < 2 or args.quiet, file=sys.stderr)
-    for p in bar:
-        try:
-            _run_one(p, p.stem, args, overrides)
-        except TorchsymError as exc:
-            failures += 1
-            print(f"torchsym detect: {p}: {exc}", file=sys.stderr)
-            if len(paths) == 1:
-                return 2
+    # three steps per input (read, solve, write), so a single input shows its stages too
+    with tqdm(total=3 * len(paths), unit="step", disable=args.quiet, file=sys.stderr, leave=False) as bar:
+        for p in paths:
+            done = bar.n
+            try:
+                _run_one(p, p.stem, args, overrides, bar)
+            except TorchsymError as exc:
+                failures += 1
+                bar.clear()
+                print(f"torchsym detect: {p}: {exc}", file=sys.stderr)
+                if len(paths) == 1:
+                    return 2
+            bar.update(done + 3 - bar.n)
     return 1 if failures else 0
 
 
@@ -122,8 +143,11 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     path = data.sample_path("chair.ply")
     print(f"torchsym demo: reflection plane of the embedded sample {path.name} (4,000 points, known plane)")
+    from tqdm import tqdm
+
     args.config, args.kind, args.no_figures = None, None, False
-    record = _run_one(path, "chair", args, {})
+    with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
+        record = _run_one(path, "chair", args, {}, bar)
     n_true, b_true = data.sample_plane()
     import torch
 

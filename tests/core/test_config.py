@@ -13,6 +13,14 @@ class TestConfigs:
     def test_there_are_configs(self):
         assert any(p.name == "pointcloud_plane.yaml" for p in CONFIGS)
 
+    def test_every_solver_has_a_config(self):
+        import yaml
+
+        used = {step["name"] if isinstance(step, dict) else step
+                for p in CONFIGS for step in yaml.safe_load(p.read_text())["steps"]}
+        missing = set(torchsym.SOLVERS.names()) - used
+        assert not missing, f"registered solvers without a file in configs/: {sorted(missing)}"
+
     @pytest.mark.parametrize("path", CONFIGS, ids=[p.name for p in CONFIGS])
     def test_every_config_builds(self, path):
         pipe = build_pipeline(path)

@@ -8,6 +8,7 @@ from torchsym.geometry import (
     angles_to_normal,
     normal_to_angles,
     plane_angle,
+    plane_distance,
     plane_from_pairs,
     plane_from_reflection,
     point_plane_distance,
@@ -126,6 +127,28 @@ class TestAnglesAndConversions:
         a = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)
         b = torch.tensor([1.0, 1e-9, 0.0], dtype=torch.float64)
         assert math.isclose(float(plane_angle(a, b)), 1e-9, rel_tol=1e-6)
+
+    def test_plane_distance(self):
+        x = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)
+        # parallel planes x = 1 and x = 3 (one given with a flipped, scaled normal): 2 apart from anywhere
+        d = plane_distance(x, torch.tensor(-1.0), -2 * x, torch.tensor(6.0), point=_rand(3))
+        assert math.isclose(float(d), 2.0, rel_tol=1e-12)
+        # planes crossing on the z axis: 0 on it, growing with the distance from it
+        y = torch.tensor([math.sin(0.1), math.cos(0.1), 0.0], dtype=torch.float64)
+        assert float(plane_distance(x, 0.0, y, 0.0, point=torch.tensor([0.0, 0.0, 5.0], dtype=torch.float64))) < 1e-12
+        far = plane_distance(x, 0.0, y, 0.0, point=torch.tensor([0.0, 10.0, 0.0], dtype=torch.float64))
+        # the point lies on plane a, 10 cos(0.1) from plane b; its foot on b is 10 cos(0.1) sin(0.1) from a
+        assert math.isclose(float(far), 0.5 * (10 * math.cos(0.1) + 10 * math.cos(0.1) * math.sin(0.1)), rel_tol=1e-9)
+        # batched, any dimension, differentiable
+        na, nb = _rand(4, 5, seed=1).requires_grad_(), _rand(4, 5, seed=2)
+        out = plane_distance(na, _rand(4, seed=3), nb, _rand(4, seed=4))
+        assert out.shape == (4,)
+        out.sum().backward()
+        assert na.grad is not None and torch.isfinite(na.grad).all()
+        with pytest.raises(InputShapeError, match="normal_b: expected"):
+            plane_distance(x, 0.0, torch.ones(2), 0.0)
+        with pytest.raises(InputShapeError, match="point: expected"):
+            plane_distance(x, 0.0, x, 0.0, point=torch.ones(2))
 
     def test_eq_5_1_round_trip(self):
         tx, ty = torch.tensor([0.3, -1.2]), torch.tensor([-0.4, 0.9])

@@ -14,7 +14,7 @@ from torchsym.image import (
     boundary_clique_axes,
 )
 from torchsym.image.boundary import boundary_curves, remove_junctions
-from torchsym.image.boundary_cliques import _vertex_cover_lp_zeros, dominant_clique
+from torchsym.image.boundary_cliques import _vertex_cover_highs_zeros, _vertex_cover_lp_zeros, dominant_clique
 from torchsym.metrics.axes import match_axes
 
 
@@ -58,6 +58,16 @@ class TestBoundaryCliqueAxes:
         assert torch.equal(out[0].axes, out[1].axes)
         assert "max_axes=2" in repr(m)
 
+    def test_stage_timings(self):
+        from torchsym.image.synthetic import mirrored_objects_image
+
+        img, _ = mirrored_objects_image(1)
+        res = boundary_clique_axes(img)
+        assert set(res.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques"}
+        assert sum(res.info["stage_seconds"].values()) <= res.info["seconds"] + 1e-6
+        again = boundary_clique_axes(img, clique_solver="highs")
+        assert again.axes.shape[0] >= 1
+
     def test_exception(self):
         with pytest.raises(InputValueError, match="edges: expected 'canny' or 'edge_drawing', got 'sobel'"):
             BoundaryCliqueDetector(edges="sobel")
@@ -75,6 +85,14 @@ class TestDominantClique:
         adj[1, 3] = adj[3, 1] = True  # a smaller clique
         clique, used_lp = dominant_clique(adj)
         assert clique.tolist() == big and used_lp
+        clique, used_lp = dominant_clique(adj, solver="highs")
+        assert clique.tolist() == big and used_lp
+
+    def test_bad_solver(self):
+        with pytest.raises(InputValueError, match="solver: expected one of 'matching', 'highs', got 'glpk'"):
+            dominant_clique(np.ones((3, 3), dtype=bool), solver="glpk")
+        with pytest.raises(InputValueError, match="clique_solver: expected one of 'matching', 'highs'"):
+            BoundaryCliqueDetector(clique_solver="glpk")
 
     def test_empty(self):
         clique, _ = dominant_clique(np.zeros((4, 4), dtype=bool))
@@ -106,6 +124,7 @@ class TestDominantClique:
             match = maximum_bipartite_matching(csr_matrix((np.ones(r.size), (r, c)), shape=(n, n)), perm_type="column")
             assert res.fun == pytest.approx(0.5 * int((match >= 0).sum()))  # König: LP optimum = matching / 2
             assert np.array_equal(np.nonzero(zero)[0], np.nonzero(res.x < 0.5)[0])
+            assert np.array_equal(zero, _vertex_cover_highs_zeros(n, cu, cv))
 
 
 class TestRemoveJunctions:

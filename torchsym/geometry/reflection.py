@@ -21,6 +21,7 @@ __all__ = [
     "canonical_sign",
     "normal_to_angles",
     "plane_angle",
+    "plane_distance",
     "plane_from_pairs",
     "plane_from_reflection",
     "point_plane_distance",
@@ -260,6 +261,42 @@ def plane_angle(normal_a: torch.Tensor, normal_b: torch.Tensor, *, oriented: boo
         cos = cos * sign
     sin = (a - cos.unsqueeze(-1) * b).norm(dim=-1)
     return torch.atan2(sin, cos)
+
+
+def plane_distance(
+    normal_a: torch.Tensor,
+    offset_a: torch.Tensor | float,
+    normal_b: torch.Tensor,
+    offset_b: torch.Tensor | float,
+    point: torch.Tensor | None = None,
+) -> torch.Tensor:
+    """Distance between two hyperplanes ``n . x + b = 0`` as seen from ``point``, ``(...)``.
+
+    The mean of two distances: from the foot of ``point`` on plane a to plane b, and from
+    its foot on plane b to plane a. For parallel planes this is their separation whatever
+    ``point`` is; for planes that cross it measures how far apart they are near ``point``
+    (0 when ``point`` lies on their intersection), as an evaluation needs (e.g. ``point``
+    the object's centre). ``point=None`` is the origin. Batched over leading dimensions
+    and differentiable; any dimension ``D >= 2``; signs of the normals do not matter.
+
+    Args:
+        normal_a, normal_b: ``(..., D)`` normals (need not be unit).
+        offset_a, offset_b: ``(...)`` offsets.
+        point: ``(..., D)`` reference point, or None.
+    """
+    _check_normal(normal_a)
+    _check_normal(normal_b)
+    if normal_a.shape[-1] != normal_b.shape[-1]:
+        raise InputShapeError(f"normal_b: expected (..., {normal_a.shape[-1]}) like normal_a, got {tuple(normal_b.shape)}")
+    a, ba = _unit(normal_a, torch.as_tensor(offset_a, dtype=normal_a.dtype, device=normal_a.device))
+    b, bb = _unit(normal_b, torch.as_tensor(offset_b, dtype=normal_b.dtype, device=normal_b.device))
+    if point is None:
+        point = torch.zeros_like(a)
+    elif point.shape[-1] != a.shape[-1]:
+        raise InputShapeError(f"point: expected (..., {a.shape[-1]}) like the normals, got {tuple(point.shape)}")
+    foot_a = point - ((point * a).sum(-1) + ba).unsqueeze(-1) * a
+    foot_b = point - ((point * b).sum(-1) + bb).unsqueeze(-1) * b
+    return 0.5 * (((foot_a * b).sum(-1) + bb).abs() + ((foot_b * a).sum(-1) + ba).abs())
 
 
 def _rot_x(t: torch.Tensor) -> torch.Tensor:

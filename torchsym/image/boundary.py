@@ -3,7 +3,8 @@
 The thesis starts from an ultrametric contour map and notes that any edge detector can
 be used. Here:
 
-1. ``edges="canny"`` (default): kornia's Canny (Gaussian smoothing, Sobel gradients,
+1. ``edges="canny"`` (the default of :func:`boundary_curves`; the axis detector
+   :func:`torchsym.image.boundary_clique_axes` defaults to Edge Drawing): kornia's Canny (Gaussian smoothing, Sobel gradients,
    non-maximum suppression, double threshold) without kornia's iterative hysteresis,
    which is slow on CPU; hysteresis is done exactly in one pass by keeping the
    8-connected components of weak-or-strong pixels that contain a strong pixel

@@ -31,6 +31,9 @@ pairs (a seeded random subset when more pass); the LP runs per connected compone
 ``G`` (isolated vertices, the outlier pairs of Sec. 2.3.2, form no clique) with one
 constraint per complement edge.
 
+``info["stage_seconds"]`` times each stage (``edges``, ``segments``, ``pairs`` (the
+screening and Eq. 2.9 tests above), ``graph``, ``cliques``); the benchmark reports them.
+
 When the rounded LP leaves no vertex (its optimum can be all one half), the clique is
 grown greedily from the vertex of highest degree instead; the result's
 ``info["clique_fallbacks"]`` counts these and ``converged`` is then False.
@@ -48,7 +51,7 @@ from torch import nn
 from torchsym.core.checks import check_image, check_int, check_positive
 from torchsym.core.random import random_subset
 from torchsym.core.registry import register_solver
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import InputShapeError, InputValueError, SolverError
 from torchsym.image.axes import (
     ReflectionAxesResult,
     build_result,
@@ -173,6 +176,9 @@ def symmetric_boundary_pairs(
     return np.stack([ii[keep], jj[keep]], 1).astype(np.int64), second[keep], cost[keep], sums[keep]
 
 
+CLIQUE_SOLVERS = ("matching", "highs")
+
+
 def _greedy_clique(adj: np.ndarray) -> np.ndarray:
     deg = adj.sum(1)
     order = np.argsort(-deg, kind="stable")
@@ -210,7 +216,21 @@ def _vertex_cover_lp_zeros(n: int, cu: np.ndarray, cv: np.ndarray) -> np.ndarray
     return reach[:n] & ~reach[n : 2 * n]  # v_L and v_R both outside the cover: x_v = 0
 
 
-def dominant_clique(adj: np.ndarray) -> tuple[np.ndarray, bool]:
+def _vertex_cover_highs_zeros(n: int, cu: np.ndarray, cv: np.ndarray) -> np.ndarray:
+    """Vertices below 0.5 in HiGHS's optimum of the vertex-cover LP (Eq. 2.11) of ``(n, edges cu-cv)``."""
+    from scipy.optimize import linprog
+    from scipy.sparse import coo_matrix
+
+    m = cu.size
+    rows = np.concatenate([np.arange(m), np.arange(m)])
+    a_ub = coo_matrix((-np.ones(2 * m), (rows, np.concatenate([cu, cv]))), shape=(m, n)).tocsr()
+    res = linprog(np.ones(n), A_ub=a_ub, b_ub=-np.ones(m), bounds=(0.0, 1.0), method="highs")
+    if res.status != 0:
+        raise SolverError(f"adj: HiGHS could not solve the vertex-cover LP of {n} vertices and {m} edges ({res.message})")
+    return res.x < 0.5
+
+
+def dominant_clique(adj: np.ndarray, solver: str = "matching") -> tuple[np.ndarray, bool]:
     """The dominant clique of a graph by the LP relaxation of minimum vertex cover (Eq. 2.11).
 
     ``min 1^T x`` s.t. ``x_u + x_v >= 1`` for every edge ``(u, v)`` of the complement
@@ -231,6 +251,9 @@ def dominant_clique(adj: np.ndarray) -> tuple[np.ndarray, bool]:
 
     Args:
         adj: ``(V, V)`` bool symmetric adjacency, no self loops.
+        solver: ``"matching"`` (the exact half-integral optimum above, default) or
+            ``"highs"`` (the LP of Eq. 2.11 by ``scipy.optimize.linprog`` with HiGHS, as
+            the thesis solves it with an LP solver).
 
     Returns:
         ``(clique indices, used_lp)``; ``used_lp`` is False when a component's rounded LP
@@ -239,6 +262,9 @@ def dominant_clique(adj: np.ndarray) -> tuple[np.ndarray, bool]:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
+    if solver not in CLIQUE_SOLVERS:
+        raise InputValueError(f"solver: expected one of {', '.join(map(repr, CLIQUE_SOLVERS))}, got {solver!r}")
+    zeros = _vertex_cover_lp_zeros if solver == "matching" else _vertex_cover_highs_zeros
     v = adj.shape[0]
     if v == 0 or not adj.any():
         return np.zeros(0, dtype=np.int64), True
@@ -254,7 +280,7 @@ def dominant_clique(adj: np.ndarray) -> tuple[np.ndarray, bool]:
         if cu.size == 0:
             clique, lp_ok = np.arange(nodes.size), True
         else:
-            clique = np.nonzero(_vertex_cover_lp_zeros(nodes.size, cu, cv))[0]
+            clique = np.nonzero(zeros(nodes.size, cu, cv))[0]
             lp_ok = clique.size > 0
             if not lp_ok:
                 clique = _greedy_clique(sub)
@@ -276,10 +302,13 @@ def _axis_of(pairs: np.ndarray) -> np.ndarray:
 
 
 def _check_settings(*, edges, sigma, low_threshold, high_threshold, segment_length, n_samples, stride, tangents,
-                    smooth, max_samples, theta, axis_distance, max_pairs, max_axes, min_support, **_) -> None:
+                    smooth, max_samples, theta, axis_distance, max_pairs, max_axes, min_support,
+                    clique_solver="matching", **_) -> None:
     """Raise :class:`InputValueError` naming the first bad setting of :func:`boundary_clique_axes`."""
     if edges not in ("canny", "edge_drawing"):
         raise InputValueError(f"edges: expected 'canny' or 'edge_drawing', got {edges!r}")
+    if clique_solver not in CLIQUE_SOLVERS:
+        raise InputValueError(f"clique_solver: expected one of {', '.join(map(repr, CLIQUE_SOLVERS))}, got {clique_solver!r}")
     if tangents not in ("gradient", "chain"):
         raise InputValueError(f"tangents: expected 'gradient' or 'chain', got {tangents!r}")
     for name, val in (("sigma", sigma), ("low_threshold", low_threshold), ("high_threshold", high_threshold),
@@ -313,6 +342,7 @@ def boundary_clique_axes(
     min_support: int = 3,
     gather_support: bool = True,
     photometric: bool = True,
+    clique_solver: str = "matching",
     generator: torch.Generator | None = None,
 ) -> ReflectionAxesResult:
     """Reflection symmetry axes of one image by boundary orientation and dominant cliques (Sec. 2.3).
@@ -348,6 +378,8 @@ def boundary_clique_axes(
             image with its reflection about the axis (over the support's bounding box),
             so that axes of textured clutter rank below axes of symmetric objects. The
             thesis ranks by support only (``photometric=False``).
+        clique_solver: how the LP of Eq. 2.11 is solved (:func:`dominant_clique`):
+            ``"matching"`` (exact, milliseconds) or ``"highs"``.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
@@ -367,16 +399,21 @@ def boundary_clique_axes(
     _check_settings(edges=edges, sigma=sigma, low_threshold=low_threshold, high_threshold=high_threshold,
                     segment_length=segment_length, n_samples=n_samples, stride=stride, tangents=tangents,
                     smooth=smooth, max_samples=max_samples, theta=theta, axis_distance=axis_distance,
-                    max_pairs=max_pairs, max_axes=max_axes, min_support=min_support)
+                    max_pairs=max_pairs, max_axes=max_axes, min_support=min_support, clique_solver=clique_solver)
     h, w = int(img.shape[-2]), int(img.shape[-1])
     t0 = time.perf_counter()
+    stages: dict[str, float] = {}
     curves, tangent = boundary_curves(img.cpu(), edges=edges, sigma=sigma, low_threshold=low_threshold,
                              high_threshold=high_threshold, min_length=int(segment_length))
+    stages["edges"] = time.perf_counter() - t0
     segs = boundary_segments(curves, tangent if tangents == "gradient" else None, smooth=smooth, segment_length=segment_length, n_samples=n_samples, stride=stride)
     if len(segs) > max_samples:
         keep = np.arange(0, len(segs), int(math.ceil(len(segs) / max_samples)))
         segs = BoundarySegments(segs.points[keep], segs.angles[keep], segs.curve[keep])
+    stages["segments"] = time.perf_counter() - t0 - stages["edges"]
+    tic = time.perf_counter()
     index, second, _cost, full_sums = symmetric_boundary_pairs(segs, theta=theta, min_distance=segment_length, max_shift=stride)
+    stages["pairs"] = time.perf_counter() - tic
     sums = full_sums
     n_found = int(index.shape[0])
     all_pairs = np.concatenate([segs.points[index[:, 0]], second], 1)  # (M, 4) every symmetric pair
@@ -386,10 +423,11 @@ def boundary_clique_axes(
     graph = np.arange(n_found)
     if n_found > max_pairs:
         graph = random_subset(n_found, max_pairs, generator).numpy()
-    info = dict(n_curves=len(curves), n_samples=len(segs), n_pairs_found=n_found)
+    info = dict(n_curves=len(curves), n_samples=len(segs), n_pairs_found=n_found, stage_seconds=stages)
     if graph.size < min_support:
         return empty_result(h, w, "boundary_cliques", pairs=torch.from_numpy(all_pairs).float(),
                             reason="too few symmetric boundary pairs", **info)
+    tic = time.perf_counter()
     pairs, sums, beta, mid = all_pairs[graph], sums[graph], all_beta[graph], all_mid[graph]  # (V, ...)
     normal = np.stack([np.cos(beta), np.sin(beta)], 1)
     off = -(normal * mid).sum(1)
@@ -400,6 +438,8 @@ def boundary_clique_axes(
     th = math.radians(theta)
     adj = (tcost + tcost.T < th) & (dist < tol) & (dist.T < tol)
     np.fill_diagonal(adj, False)
+    stages["graph"] = time.perf_counter() - tic
+    tic = time.perf_counter()
     gray = img[0].float().mean(0).numpy() if photometric else None
     full_sums32 = full_sums.astype(np.float32)
     free = np.ones(n_found, dtype=bool)  # pairs not yet supporting an axis
@@ -407,7 +447,7 @@ def boundary_clique_axes(
     for _ in range(max_axes):
         remaining = graph[free[graph]]
         pos = np.nonzero(free[graph])[0]
-        clique, used_lp = dominant_clique(adj[np.ix_(pos, pos)])
+        clique, used_lp = dominant_clique(adj[np.ix_(pos, pos)], clique_solver)
         if clique.size < min_support:
             break
         fallbacks += int(not used_lp)
@@ -428,6 +468,7 @@ def boundary_clique_axes(
         else:
             scores.append(float(members.size))
     pairs = all_pairs
+    stages["cliques"] = time.perf_counter() - tic
     info.update(clique_fallbacks=fallbacks, seconds=time.perf_counter() - t0)
     return build_result(lines, supports, scores, torch.from_numpy(pairs), h, w, "boundary_cliques",
                         converged=fallbacks == 0, **info)
@@ -463,6 +504,7 @@ class BoundaryCliqueDetector(nn.Module):
         min_support: int = 3,
         gather_support: bool = True,
         photometric: bool = True,
+        clique_solver: str = "matching",
         seed: int = 0,
     ) -> None:
         super().__init__()
@@ -471,7 +513,7 @@ class BoundaryCliqueDetector(nn.Module):
             segment_length=segment_length, n_samples=n_samples, stride=stride, tangents=tangents, smooth=smooth,
             max_samples=max_samples, theta=theta, axis_distance=axis_distance, max_pairs=max_pairs,
             max_axes=max_axes, min_support=min_support, gather_support=bool(gather_support),
-            photometric=bool(photometric),
+            photometric=bool(photometric), clique_solver=clique_solver,
         )
         _check_settings(**self.settings)
         self.seed = check_int(seed, "seed", minimum=0)

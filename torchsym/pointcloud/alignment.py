@@ -57,7 +57,7 @@ def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
         w = torch.ones_like(r)
     a = (jac * w[:, None]).T @ jac
     g = (jac * w[:, None]).T @ r
-    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype), g[:, None]).solution[:, 0]
+    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype, device=x.device), g[:, None]).solution[:, 0]
     m = normal + basis @ step[:2]
     norm = m.norm()
     return m / norm, (offset + step[2]) / norm

@@ -103,16 +103,16 @@ def initial_normals(
     best first.
     """
     if init == "grid":
-        normals = grid_normals(grid_step, torch.float64).to(dtype)
+        normals = grid_normals(grid_step, torch.float64).to(device=sample.device, dtype=dtype)
         offsets, (cost,) = score_normals(sample, index, normals, None)
         return normals, offsets, cost.argsort()
-    normals = sphere_normals(n_directions).to(dtype)
+    normals = sphere_normals(n_directions).to(device=sample.device, dtype=dtype)
     offsets, (cost, wide) = score_normals(
         sample, index, normals, (2.0 * spacing, 8.0 * spacing), coarse_index=KNNIndex(sample)
     )
     wide_order = wide.argsort()
     radius = math.sqrt(2.0 * math.pi / n_directions) * 0.5  # half the lattice spacing, radians
-    ring = torch.linspace(0, 2 * math.pi, 7, dtype=dtype)[:-1]
+    ring = torch.linspace(0, 2 * math.pi, 7, dtype=dtype, device=sample.device)[:-1]
     for _ in range(2):
         top = cost.argsort()[:beam]
         base = normals[top]  # (B, 3)

@@ -198,7 +198,7 @@ def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: flo
     probe = points[random_subset(points.shape[0], 1000, gen)]
     d, _ = index.query(probe, k=2)
     if isinstance(q, tuple):
-        return tuple(float(v) for v in d[:, 1].quantile(torch.tensor(q, dtype=d.dtype)))
+        return tuple(float(v) for v in d[:, 1].quantile(torch.tensor(q, dtype=d.dtype, device=d.device)))
     return float(d[:, 1].quantile(q))
 
 
@@ -356,7 +356,7 @@ def detect_reflection_plane(
         )
         # greedy in rank order; one matrix of |cos| between candidates, not a call per pair
         too_close = (cand @ cand.T).abs() > math.cos(math.radians(min_start_separation))  # (K, K)
-        blocked = torch.zeros(cand.shape[0], dtype=torch.bool)
+        blocked = torch.zeros(cand.shape[0], dtype=torch.bool, device=cand.device)
         out: list[tuple[torch.Tensor, torch.Tensor]] = []
         for k in order.tolist():
             if len(out) == n_starts:
@@ -374,7 +374,7 @@ def detect_reflection_plane(
     # the subsample as a point left out of it (or, when the subsample is the whole cloud,
     # as a point's nearest other point), so the same kernel over those distances.
     if sub_idx is not None:
-        left = torch.ones(n, dtype=torch.bool)
+        left = torch.ones(n, dtype=torch.bool, device=xs.device)
         left[sub_idx] = False
         left_idx = left.nonzero()[:, 0]
         d_ref, _ = sub_index.query(xs[left_idx[random_subset(left_idx.numel(), 1000, gen)]])
@@ -473,7 +473,7 @@ def detect_reflection_plane(
     tol = inlier_factor * max(full_spacing, 1e-12)
     inliers = dist <= tol
     mutual = mutual_nearest(nn_idx, nn_idx)
-    idx = torch.arange(n)
+    idx = torch.arange(n, device=nn_idx.device)
     good = inliers & mutual & (idx <= nn_idx)
     pairs = torch.stack([idx[good], nn_idx[good]], dim=1)
     keep = mutual & inliers

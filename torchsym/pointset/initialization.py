@@ -275,7 +275,7 @@ def thesis_pair_search(
         order_j = rng.permutation(others)
         if others.size == 0:
             continue
-        n_qj, c_qj, mid_qj = _bisector(x[q][None], x[order_j])  # (M, D) in draw order
+        n_qj, _, mid_qj = _bisector(x[q][None], x[order_j])  # (M, D) in draw order
         hit = None
         for start in range(0, order_i.size, chunk):
             ii = order_i[start : start + chunk]
