@@ -76,6 +76,14 @@ log = logging.getLogger(__name__)
 
 #: quantile of nearest-neighbour distances that sets the kernel widths of the search
 SPACING_QUANTILE = 0.1
+# The dense core (see detect_reflection_plane): points within CORE_FACTOR spacings of their
+# nearest other point; used for the PCA axes and the scoring sample only when at least
+# SPARSE_MIN_SHARE of the points are farther than SPARSE_FACTOR spacings from any other.
+# On the benchmark's 1,000-point clouds that share is at most 0.13 when clean, 0.03 under
+# perturbation, and at least 0.17 (median 0.29) with 50 to 200 % outliers.
+CORE_FACTOR = 3.0
+SPARSE_FACTOR = 6.0
+SPARSE_MIN_SHARE = 0.15
 # When no start is accepted after the pre-alignment, Algorithm 6 runs from each on the
 # subsample for at most FALLBACK_ITER steps (to the pre-alignment's angle tolerance; the
 # polish on the whole cloud does the rest), and the search stops once START_PATIENCE starts
@@ -334,6 +342,20 @@ def detect_reflection_plane(
     sub = xs[sub_idx] if sub_idx is not None else xs
     sub_index = KNNIndex(sub)
     spacing = _spacing(sub, sub_index, gen, q=SPACING_QUANTILE)
+    # Dense core: points whose nearest other point is within CORE_FACTOR spacings. A sampled
+    # surface is denser than scattered outliers, so when a sizeable share of the points is
+    # sparse (outliers), the PCA axes and the sample that scores candidate normals come from
+    # the core only; outliers otherwise dominate both (uniform outliers in a box make the
+    # PCA axes the box's axes). On a symmetric cloud the core is symmetric too (nearest
+    # neighbour distances are invariant under the reflection). Alternation still runs on
+    # every point of the subsample.
+    nn_sub = sub_index.query(sub, k=2)[0][:, 1]
+    core = nn_sub <= CORE_FACTOR * spacing
+    sparse = float((nn_sub > SPARSE_FACTOR * spacing).double().mean())
+    if sparse >= SPARSE_MIN_SHARE and int(core.sum()) >= 4:
+        core_pts = sub[core]
+        sample = core_pts[random_subset(core_pts.shape[0], n_init_samples, gen)]
+        centered = core_pts - core_pts.mean(0)
     pca: list[tuple[torch.Tensor, torch.Tensor]] = []
     if pca_starts:
         # For an exactly symmetric set the covariance commutes with the reflection, so the
