@@ -198,16 +198,22 @@ def _dominant(supports: list[float]) -> bool:
     return best >= DOMINANCE * middle and best - middle >= DOMINANCE_GAP
 
 
+def _nn_probe(points: torch.Tensor, index: KNNIndex, gen: torch.Generator) -> torch.Tensor:
+    """Distances from up to 1,000 random points to their nearest other point."""
+    probe = points[random_subset(points.shape[0], 1000, gen)]
+    d, _ = index.query(probe, k=2)
+    return d[:, 1]
+
+
 def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float | tuple[float, ...] = 0.5):
     """Quantile ``q`` of the distance from a point to its nearest other point, on up to
     1,000 random points (a tuple of quantiles gives a tuple, from one query). A low
     quantile measures the densest part, the sampled surface, even when outliers (which
     are sparser) are most of the cloud."""
-    probe = points[random_subset(points.shape[0], 1000, gen)]
-    d, _ = index.query(probe, k=2)
+    d = _nn_probe(points, index, gen)
     if isinstance(q, tuple):
-        return tuple(float(v) for v in d[:, 1].quantile(torch.tensor(q, dtype=d.dtype, device=d.device)))
-    return float(d[:, 1].quantile(q))
+        return tuple(float(v) for v in d.quantile(torch.tensor(q, dtype=d.dtype, device=d.device)))
+    return float(d.quantile(q))
 
 
 def detect_reflection_plane(
@@ -341,7 +347,8 @@ def detect_reflection_plane(
     sub_idx = random_subset(n, n_refine_samples, gen) if n > n_refine_samples else None
     sub = xs[sub_idx] if sub_idx is not None else xs
     sub_index = KNNIndex(sub)
-    spacing = _spacing(sub, sub_index, gen, q=SPACING_QUANTILE)
+    probe_nn = _nn_probe(sub, sub_index, gen)
+    spacing = float(probe_nn.quantile(SPACING_QUANTILE))
     # Dense core: points whose nearest other point is within CORE_FACTOR spacings. A sampled
     # surface is denser than scattered outliers, so when a sizeable share of the points is
     # sparse (outliers), the PCA axes and the sample that scores candidate normals come from
@@ -349,13 +356,13 @@ def detect_reflection_plane(
     # PCA axes the box's axes). On a symmetric cloud the core is symmetric too (nearest
     # neighbour distances are invariant under the reflection). Alternation still runs on
     # every point of the subsample.
-    nn_sub = sub_index.query(sub, k=2)[0][:, 1]
-    core = nn_sub <= CORE_FACTOR * spacing
-    sparse = float((nn_sub > SPARSE_FACTOR * spacing).double().mean())
-    if sparse >= SPARSE_MIN_SHARE and int(core.sum()) >= 4:
-        core_pts = sub[core]
-        sample = core_pts[random_subset(core_pts.shape[0], n_init_samples, gen)]
-        centered = core_pts - core_pts.mean(0)
+    sparse = float((probe_nn > SPARSE_FACTOR * spacing).double().mean())
+    if sparse >= SPARSE_MIN_SHARE:
+        core = sub_index.query(sub, k=2)[0][:, 1] <= CORE_FACTOR * spacing
+        if int(core.sum()) >= 4:
+            core_pts = sub[core]
+            sample = core_pts[random_subset(core_pts.shape[0], n_init_samples, gen)]
+            centered = core_pts - core_pts.mean(0)
     pca: list[tuple[torch.Tensor, torch.Tensor]] = []
     if pca_starts:
         # For an exactly symmetric set the covariance commutes with the reflection, so the
