@@ -119,7 +119,8 @@ def main(argv: list[str] | None = None) -> int:
                 row[f"max_f_{crit}"] = ev.max_f
             row["median_seconds"] = statistics.median(times)
             if stages:
-                row["median_stage_seconds"] = {k: statistics.median(st[k] for st in stages if k in st) for k in stages[0]}
+                keys = list(dict.fromkeys(k for st in stages for k in st))
+                row["median_stage_seconds"] = {k: statistics.median(st.get(k, 0.0) for st in stages) for k in keys}
         found = total = n_det = 0
         syn_times = []
         for img, gt in syn:

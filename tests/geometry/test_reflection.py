@@ -149,6 +149,10 @@ class TestAnglesAndConversions:
             plane_distance(x, 0.0, torch.ones(2), 0.0)
         with pytest.raises(InputShapeError, match="point: expected"):
             plane_distance(x, 0.0, x, 0.0, point=torch.ones(2))
+        with pytest.raises(InputShapeError, match="point: expected"):
+            plane_distance(x, 0.0, x, 0.0, point=[0.0, 0.0, 0.0])
+        with pytest.raises(InputValueError, match="normal_b: expected non-zero normals"):
+            plane_distance(x, 0.0, torch.zeros(3), 0.0)
 
     def test_eq_5_1_round_trip(self):
         tx, ty = torch.tensor([0.3, -1.2]), torch.tensor([-0.4, 0.9])

@@ -49,6 +49,10 @@ class TestPlaneMatch:
         n = torch.ones(3) / math.sqrt(3)
         assert math.isclose(plane_box_width(n, torch.tensor(-0.5 / math.sqrt(3)), LO, HI), 0.5 * math.sqrt(2), rel_tol=1e-6)
         assert plane_box_width(X, torch.tensor(-5.0), LO, HI) == 0.0  # misses the box
+        with pytest.raises(InputShapeError, match=r"normal: expected a \(3,\) tensor"):
+            plane_box_width(torch.ones(2), torch.tensor(0.0), LO, HI)
+        with pytest.raises(InputValueError, match="normal: expected a non-zero vector"):
+            plane_box_width(torch.zeros(3), torch.tensor(0.0), LO, HI)
 
     def test_distance_in_width(self):
         m = plane_match(X, torch.tensor(-1.2), X, torch.tensor(-1.0), LO, HI)
@@ -113,8 +117,10 @@ class TestThresholdCurve:
         assert s.threshold_curve.max_f == 1.0 and "threshold_curve" in s.to_dict()
 
     def test_exception(self):
-        with pytest.raises(InputValueError, match="steps: expected at least 2"):
+        with pytest.raises(InputValueError, match="steps: expected an integer >= 2"):
             plane_threshold_curve([], 0, steps=1)
+        with pytest.raises(InputValueError, match="max_angle"):
+            plane_threshold_curve([], 0, max_angle=-1.0)
         m = plane_match(X, torch.tensor(-1.0), X, torch.tensor(-1.0), LO, HI)
         with pytest.raises(InputValueError, match="exceed n_ground_truth"):
             plane_threshold_curve([m, m], 1)

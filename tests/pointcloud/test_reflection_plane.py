@@ -104,6 +104,14 @@ class TestDetectReflectionPlane:
         assert _deg(res.normal, c.normal) < 0.5
         assert res.n_starts > 3  # no start reaches the clean-cloud acceptance level here
 
+    def test_duplicated_points(self):
+        # a fifth of the points doubled (as on mesh seams): the spacing quantile is 0, and
+        # the dense-core rule for outliers must not reduce the cloud to the duplicates
+        c = planted_symmetric_cloud(2000, generator=1)
+        pts = torch.cat([c.points, c.points[:400]])
+        res = detect_reflection_plane(pts)
+        assert _deg(res.normal, c.normal) < 0.01 and res.score > 0.9
+
     def test_clean_cloud_accepts_early(self):
         # on a subsample the support is calibrated by held-out points, so a clean cloud
         # larger than n_refine_samples stops after a few of its 40 starts

@@ -284,10 +284,15 @@ def plane_distance(
         offset_a, offset_b: ``(...)`` offsets.
         point: ``(..., D)`` reference point, or None.
     """
-    _check_normal(normal_a)
-    _check_normal(normal_b)
+    for name, nrm in (("normal_a", normal_a), ("normal_b", normal_b)):
+        if not isinstance(nrm, torch.Tensor) or nrm.dim() < 1 or nrm.shape[-1] < 2:
+            raise InputShapeError(f"{name}: expected a (..., D) tensor with D >= 2, got {getattr(nrm, 'shape', type(nrm).__name__)}")
+        if bool((nrm.norm(dim=-1) == 0).any()):
+            raise InputValueError(f"{name}: expected non-zero normals, got a zero vector")
     if normal_a.shape[-1] != normal_b.shape[-1]:
         raise InputShapeError(f"normal_b: expected (..., {normal_a.shape[-1]}) like normal_a, got {tuple(normal_b.shape)}")
+    if point is not None and not isinstance(point, torch.Tensor):
+        raise InputShapeError(f"point: expected a (..., {normal_a.shape[-1]}) tensor or None, got {type(point).__name__}")
     a, ba = _unit(normal_a, torch.as_tensor(offset_a, dtype=normal_a.dtype, device=normal_a.device))
     b, bb = _unit(normal_b, torch.as_tensor(offset_b, dtype=normal_b.dtype, device=normal_b.device))
     if point is None:

@@ -425,6 +425,7 @@ def boundary_clique_axes(
         graph = random_subset(n_found, max_pairs, generator).numpy()
     info = dict(n_curves=len(curves), n_samples=len(segs), n_pairs_found=n_found, stage_seconds=stages)
     if graph.size < min_support:
+        stages.update(graph=0.0, cliques=0.0)
         return empty_result(h, w, "boundary_cliques", pairs=torch.from_numpy(all_pairs).float(),
                             reason="too few symmetric boundary pairs", **info)
     tic = time.perf_counter()

@@ -19,7 +19,7 @@ from typing import Sequence
 
 import torch
 
-from torchsym.core.checks import as_tensor
+from torchsym.core.checks import as_tensor, check_int, check_positive
 from torchsym.core.results import Result
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.geometry.reflection import plane_angle, point_plane_distance
@@ -66,11 +66,22 @@ def plane_box_width(normal: torch.Tensor, offset: torch.Tensor, box_min: torch.T
     """The thesis's length unit for one plane (Sec. 5.2.4): the shortest edge of the
     triangle of three points where the plane cuts the box.
 
-    The thesis takes "three points of intersection" without saying which; we take the
-    three that span the largest triangle, so the unit does not depend on the order of
-    the box's edges. 0 when the plane misses the box or touches it in fewer than three points.
+    The thesis takes "three points of intersection" ``p1, p2, p3`` without saying which,
+    and uses ``min(|p1 - p2|, |p1 - p3|)``, which depends on which point is ``p1``. We take
+    the three that span the largest triangle and the shortest of its three edges, so the
+    unit depends on neither the order of the box's edges nor the labelling. 0 when the
+    plane misses the box or touches it in fewer than three points.
+
+    Raises:
+        InputShapeError: ``normal``, ``box_min`` or ``box_max`` not ``(3,)``.
+        InputValueError: a zero normal.
     """
-    pts = _box_polygon(normal, offset, box_min, box_max)
+    for name, v in (("normal", normal), ("box_min", box_min), ("box_max", box_max)):
+        if not isinstance(v, torch.Tensor) or v.shape != (3,):
+            raise InputShapeError(f"{name}: expected a (3,) tensor, got {getattr(v, 'shape', type(v).__name__)}")
+    if float(normal.double().norm()) == 0.0:
+        raise InputValueError("normal: expected a non-zero vector, got a zero vector")
+    pts = _box_polygon(normal, torch.as_tensor(offset), box_min, box_max)
     if pts.shape[0] < 3:
         return 0.0
     best, width = -1.0, 0.0
@@ -105,8 +116,9 @@ class PlaneMatch(Result):
         correct: both below their thresholds.
         width: the thesis's length unit w for this pair, the smaller of
             :func:`plane_box_width` of the two planes (0 if either misses the box).
-        distance_in_width: the centre distance in units of ``width`` (inf when 0), the
-            quantity the thesis thresholds by ``tau_d in [0, 2] x w``.
+        distance_in_width: the centre distance in units of ``width``, the quantity the
+            thesis thresholds by ``tau_d in [0, 2] x w`` (when ``width`` is 0: 0 if the
+            distance is 0, else inf).
     """
 
     angle: float
@@ -260,9 +272,10 @@ def plane_threshold_curve(
     ``max_distance * k / (steps - 1)`` widths; each object has one ground-truth plane
     and at most one detection, so an incorrect detection is both a false positive and a
     missed plane. Defaults are the thesis's ranges, tau_theta in [0, 45] degrees and
-    tau_d in [0, 2] x w. With one detection per object precision and recall are equal
-    and the maximum sits at the loosest point: the curve shows how fast the detections
-    become correct, the maximum is the share within 45 degrees and 2 w.
+    tau_d in [0, 2] x w. When every object has a detection, precision and recall are
+    equal and the maximum sits at the loosest point: the curve shows how fast the
+    detections become correct, the maximum is the share within 45 degrees and 2 w
+    (objects without a detection lower the recall only).
 
     Args:
         matches: one :class:`PlaneMatch` per object, or None where nothing was detected.
@@ -271,8 +284,9 @@ def plane_threshold_curve(
         max_distance: loosest distance threshold, in widths w.
         steps: number of points on the curve (>= 2).
     """
-    if steps < 2:
-        raise InputValueError(f"steps: expected at least 2 points on the curve, got {steps}")
+    steps = check_int(steps, "steps", minimum=2)
+    max_angle = check_positive(max_angle, "max_angle")
+    max_distance = check_positive(max_distance, "max_distance")
     if n_ground_truth < 0:
         raise InputValueError(f"n_ground_truth: expected >= 0, got {n_ground_truth}")
     found = [m for m in matches if m is not None]

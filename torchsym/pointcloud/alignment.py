@@ -150,7 +150,9 @@ def alternate(
     residual (not converged; the best plane seen is returned).
 
     Returns ``(normal, offset, iterations, converged, progress residual, residuals,
-    nearest indices)``; the last two are for the returned plane, or None.
+    nearest indices)``. The last three are for the returned plane when the run stalled
+    (then the residuals are None), and for the plane before the last step when it
+    converged (that step moved it less than the tolerances).
     """
 
     def evaluate(n_: torch.Tensor, b_: torch.Tensor):

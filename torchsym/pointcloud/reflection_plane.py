@@ -120,7 +120,9 @@ class ReflectionPlaneResult(Result):
         inliers: ``(N,)`` bool, points whose mirror image lands within the tolerance of
             the cloud.
         residual: median distance from a point's mirror image to its nearest point,
-            over all points, in input units.
+            over all points, in input units. Like ``pairs`` and ``inliers`` it is
+            measured with the plane of the last Algorithm 6 step, which differs from
+            ``normal``/``offset`` by less than the tolerances (``tol_angle``, ``tol_offset``).
         score: share of points that are inliers, in [0, 1]: near 1 for a symmetric
             cloud, low when the cloud has no reflection symmetry.
         tolerance: the inlier distance used (``inlier_factor`` x the median spacing).
@@ -357,7 +359,9 @@ def detect_reflection_plane(
     # neighbour distances are invariant under the reflection). Alternation still runs on
     # every point of the subsample.
     sparse = float((probe_nn > SPARSE_FACTOR * spacing).double().mean())
-    if sparse >= SPARSE_MIN_SHARE:
+    # spacing 0: over a tenth of the points have an exact duplicate (e.g. mesh seams), and
+    # the "core" would be the duplicates alone
+    if spacing > 0 and sparse >= SPARSE_MIN_SHARE:
         core = sub_index.query(sub, k=2)[0][:, 1] <= CORE_FACTOR * spacing
         if int(core.sum()) >= 4:
             core_pts = sub[core]

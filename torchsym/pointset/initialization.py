@@ -251,7 +251,10 @@ def thesis_pair_search(
     two tests (angle ``<= eps_theta``, distance ratio ``>= 1 - eps_d``), and keeps the first
     such two pairs. Drawing ``j`` without replacement until a pass is the same as taking the
     first passing ``j`` of a random permutation, which is how it is computed here, ``chunk``
-    values of ``i`` at a time. The 2 pairs of each of the ``n_runs`` runs give 20 candidate
+    values of ``i`` at a time. The angle test is the thesis's, on the signed normals
+    ``(x_p - x_i) / |x_p - x_i|`` and ``(x_q - x_j) / |x_q - x_j|``: it passes true pairs
+    only when ``x_p`` and ``x_q`` lie on the same side of the plane (our
+    :func:`pair_search` compares ``|cos|``). The 2 pairs of each of the ``n_runs`` runs give 20 candidate
     planes (the bisectors of the pairs); the start is their median plane: the componentwise
     median of the normals, signs aligned with the normal nearest to the others, and the
     median of the pairs' midpoints as the point ``t``.
@@ -280,12 +283,11 @@ def thesis_pair_search(
         for start in range(0, order_i.size, chunk):
             ii = order_i[start : start + chunk]
             n_pi, c_pi, mid_pi = _bisector(x[p][None], x[ii])  # (m, D)
-            cos = np.abs(n_pi @ n_qj.T)  # (m, M)
+            cos = n_pi @ n_qj.T  # (m, M), signed as in the thesis: cos^-1(n_pi^T n_qj) <= eps_theta
             d_q = np.abs(n_pi @ x[q] - c_pi)[:, None]  # (m, 1)
             d_j = np.abs(n_pi @ x[order_j].T - c_pi[:, None])  # (m, M)
             ratio = np.minimum(d_q, d_j) / np.maximum(np.maximum(d_q, d_j), 1e-300)
-            ok = (np.arccos(np.clip(cos, 0.0, 1.0)) <= eps_theta) & (ratio >= 1.0 - eps_d)
-            ok &= ii[:, None] != order_j[None, :]
+            ok = (np.arccos(np.clip(cos, -1.0, 1.0)) <= eps_theta) & (ratio >= 1.0 - eps_d)
             rows = np.nonzero(ok.any(1))[0]
             if rows.size:
                 r = int(rows[0])
