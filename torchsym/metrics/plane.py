@@ -47,6 +47,13 @@ def _box_edges(lo: torch.Tensor, hi: torch.Tensor) -> tuple[torch.Tensor, torch.
     return a, b
 
 
+def _check_vectors(**vectors: torch.Tensor) -> None:
+    """Raise :class:`InputShapeError` naming the first argument that is not a ``(3,)`` tensor."""
+    for name, v in vectors.items():
+        if not isinstance(v, torch.Tensor) or v.shape != (3,):
+            raise InputShapeError(f"{name}: expected a (3,) tensor, got {getattr(v, 'shape', type(v).__name__)}")
+
+
 def _box_polygon(normal: torch.Tensor, offset: torch.Tensor, box_min: torch.Tensor, box_max: torch.Tensor) -> torch.Tensor:
     """``(P, 3)`` distinct points where the plane crosses the box's edges (P = 0 or 3..6)."""
     n = normal.double() / normal.double().norm()
@@ -76,9 +83,7 @@ def plane_box_width(normal: torch.Tensor, offset: torch.Tensor, box_min: torch.T
         InputShapeError: ``normal``, ``box_min`` or ``box_max`` not ``(3,)``.
         InputValueError: a zero normal.
     """
-    for name, v in (("normal", normal), ("box_min", box_min), ("box_max", box_max)):
-        if not isinstance(v, torch.Tensor) or v.shape != (3,):
-            raise InputShapeError(f"{name}: expected a (3,) tensor, got {getattr(v, 'shape', type(v).__name__)}")
+    _check_vectors(normal=normal, box_min=box_min, box_max=box_max)
     if float(normal.double().norm()) == 0.0:
         raise InputValueError("normal: expected a non-zero vector, got a zero vector")
     pts = _box_polygon(normal, torch.as_tensor(offset), box_min, box_max)
@@ -148,9 +153,7 @@ def plane_match(
         angle_threshold: largest angle in degrees for a correct detection.
         distance_threshold: largest centre distance as a fraction of the box diagonal.
     """
-    for name, v in (("normal", normal), ("gt_normal", gt_normal), ("box_min", box_min), ("box_max", box_max)):
-        if not isinstance(v, torch.Tensor) or v.shape != (3,):
-            raise InputShapeError(f"{name}: expected a (3,) tensor, got {getattr(v, 'shape', type(v).__name__)}")
+    _check_vectors(normal=normal, gt_normal=gt_normal, box_min=box_min, box_max=box_max)
     angle = float(plane_angle(normal.double(), gt_normal.double())) * 180.0 / math.pi
     centre = plane_center_in_box(normal, torch.as_tensor(offset), box_min, box_max)
     diag = float((box_max.double() - box_min.double()).norm())
