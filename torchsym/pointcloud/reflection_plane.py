@@ -201,10 +201,16 @@ def _dominant(supports: list[float]) -> bool:
 
 
 def _nn_probe(points: torch.Tensor, index: KNNIndex, gen: torch.Generator) -> torch.Tensor:
-    """Distances from up to 1,000 random points to their nearest other point."""
+    """Distances from up to 1,000 random points to their nearest other point.
+
+    Exact duplicates (distance 0, e.g. the shared vertices of a mesh's seams) say nothing
+    about the sampling density and are left out, unless every probe is one.
+    """
     probe = points[random_subset(points.shape[0], 1000, gen)]
     d, _ = index.query(probe, k=2)
-    return d[:, 1]
+    d = d[:, 1]
+    positive = d[d > 0]
+    return positive if positive.numel() else d
 
 
 def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: float | tuple[float, ...] = 0.5):
@@ -359,8 +365,6 @@ def detect_reflection_plane(
     # neighbour distances are invariant under the reflection). Alternation still runs on
     # every point of the subsample.
     sparse = float((probe_nn > SPARSE_FACTOR * spacing).double().mean())
-    # spacing 0: over a tenth of the points have an exact duplicate (e.g. mesh seams), and
-    # the "core" would be the duplicates alone
     if spacing > 0 and sparse >= SPARSE_MIN_SHARE:
         core = sub_index.query(sub, k=2)[0][:, 1] <= CORE_FACTOR * spacing
         if int(core.sum()) >= 4:
