@@ -148,6 +148,12 @@ class TestIntrinsicSymmetryModule:
             IntrinsicSymmetry(correct=1)  # type: ignore[arg-type]
         with pytest.raises(InputValueError, match="components: expected 'largest' or 'refuse', got 'all'"):
             IntrinsicSymmetry(components="all")
+        with pytest.raises(InputValueError, match="orientation_hypothesis: expected True or False, got 'yes'"):
+            IntrinsicSymmetry(orientation_hypothesis="yes")  # type: ignore[arg-type]
+        with pytest.raises(InputValueError, match="select_samples: expected an integer >= 50, got 10"):
+            IntrinsicSymmetry(select_samples=10)
+        with pytest.raises(InputValueError, match="max_distortion: expected a positive number"):
+            IntrinsicSymmetry(max_distortion=0.0)
 
     def test_config(self):
         from pathlib import Path
@@ -180,12 +186,32 @@ def test_no_pairs_gives_identity(shared_data):
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")  # 122 components, largest without pairs
-    out = intrinsic_symmetry(mesh)
+    out = intrinsic_symmetry(mesh, orientation_hypothesis=False)
     kept = torch.nonzero(out.map >= 0).ravel()
     assert out.dropped_vertices > 0 and (out.map < 0).sum() == out.dropped_vertices
     assert out.pairs.shape[0] == 0
     assert torch.equal(out.map[kept], kept)
     assert any("no symmetry found" in n for n in out.notes)
+
+
+def test_orientation_hypothesis_finds_what_pairs_miss(shared_data):
+    """The largest part of boeing.off is a flat panel, mirror symmetric, on which no
+    feature points pair up; the orientation-reversing functional map finds its mirror."""
+    from torchsym.io import read_mesh
+
+    mesh = read_mesh(shared_data / "meshes" / "boeing.off")
+    out = intrinsic_symmetry(mesh)
+    assert out.hypothesis == "orientation"
+    kept = torch.nonzero(out.map >= 0).ravel()
+    x = mesh.vertices[kept].double().numpy()
+    y = mesh.vertices[out.map[kept]].double().numpy()
+    assert np.mean(np.all(x == y, axis=1)) < 0.1  # not the identity
+    # the map is close to one mirror reflection: fit the plane from the displacements
+    normal = np.linalg.svd(y - x - (y - x).mean(0))[2][0]
+    centre = (0.5 * (x + y)).mean(0)
+    mirrored = x - 2.0 * ((x - centre) @ normal)[:, None] * normal
+    diag = np.linalg.norm(x.max(0) - x.min(0))
+    assert np.median(np.linalg.norm(mirrored - y, axis=1)) < 0.03 * diag
 
 
 @pytest.fixture(scope="module")

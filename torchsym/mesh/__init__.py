@@ -26,6 +26,13 @@ from torchsym.mesh.operators import (
     mass_matrix,
     ring_neighbourhood,
 )
+from torchsym.mesh.orientation import (
+    descriptor_operators,
+    functional_to_pointwise,
+    orientation_operators,
+    orientation_reversing_map,
+    resolvent_mask,
+)
 from torchsym.mesh.pairs import eigenfunction_signs, pair_affinity, symmetric_pairs
 from torchsym.mesh.validate import ValidatedMesh, validate_mesh
 
@@ -39,20 +46,25 @@ __all__ = [
     "correct_eigenfunctions",
     "correction_cost",
     "cotangent_laplacian",
+    "descriptor_operators",
     "edge_graph",
     "eigenfunction_signs",
     "face_areas",
+    "functional_to_pointwise",
     "geodesic_distances",
     "heat_kernel_signature",
     "hks_feature_points",
     "hks_times",
     "intrinsic_symmetry",
+    "laplacian_eigen",
     "map_consistency",
     "map_quality",
-    "pointwise_to_functional",
-    "laplacian_eigen",
     "mass_matrix",
+    "orientation_operators",
+    "orientation_reversing_map",
     "pair_affinity",
+    "pointwise_to_functional",
+    "resolvent_mask",
     "ring_neighbourhood",
     "shortest_paths",
     "symmetric_pairs",

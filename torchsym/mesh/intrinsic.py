@@ -6,6 +6,12 @@ eigenfunctions from geodesics between pairs, giving the diagonal functional map 
 (6.2.5, Theorem 6.2.1), the eigenfunction correction ``R`` on SO(k) (6.2.6, Eq. 6.4) and
 the dense map by nearest neighbours in the spectral embedding (6.2.7).
 :class:`IntrinsicSymmetry` is its module form, registered as ``intrinsic_symmetry``.
+
+Beyond the thesis, the map can come from one of several hypotheses: the thesis's pairs,
+pairs on the HKS alone, and an orientation-reversing functional map fitted to the dense
+HKS (:mod:`torchsym.mesh.orientation`). They are compared on a vertex sample after
+ZoomOut refinement by tests of an isometric involution; the thesis's map is replaced only
+when another one also distorts geodesics less.
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from torchsym.mesh.operators import (
     mass_matrix,
     ring_neighbourhood,
 )
+from torchsym.mesh.orientation import orientation_reversing_map
 from torchsym.mesh.pairs import eigenfunction_signs, symmetric_pairs
 from torchsym.mesh.validate import validate_mesh
 
@@ -86,28 +93,37 @@ class IntrinsicSymmetryResult(Result):
     Attributes:
         map: ``(V,)`` int64, for every input vertex (input order) the index of its
             intrinsically symmetric vertex; ``-1`` for vertices of dropped components.
-        functional_map: ``(k, k)`` the diagonal functional map ``C`` (+1 even, -1 odd
-            eigenfunction, 0 unused) in the corrected basis ``Phi R`` (before any
-            ``refine_iters`` rounds, which work in a larger basis).
+        functional_map: ``(k, k)`` the functional map ``C`` of the chosen hypothesis
+            (before any ``refine_iters`` rounds, which work in a larger basis): for the
+            thesis's pairs the diagonal ``diag(s)`` (+1 even, -1 odd eigenfunction, 0
+            unused) in the corrected basis ``Phi R``; for the orientation-reversing
+            hypothesis the full ``C`` in ``Phi`` (``R = I``), see
+            :func:`~torchsym.mesh.orientation.orientation_reversing_map`.
         rotation: ``(k, k)`` the eigenfunction correction ``R`` in SO(k) (identity when
             the correction is off).
-        map_before_refine: ``(V,)`` int64, the thesis's dense map (Sec. 6.2.7) from ``C``
-            and ``R``, before the ZoomOut rounds (equal to ``map`` when
+        map_before_refine: ``(V,)`` int64, the dense map (Sec. 6.2.7) from ``C`` and
+            ``R`` of the chosen hypothesis, before the ZoomOut rounds (equal to ``map`` when
             ``refine_iters == 0``); input order, ``-1`` for dropped vertices.
         refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
             round in the first ``k_r = refine_k`` Laplace-Beltrami eigenfunctions ``Phi``
-            of the solved component: ``map`` is the nearest row of ``Phi`` to each row of
-            ``Phi C_r``. ``(0, 0)`` when ``refine_iters == 0``.
+            of the solved component, fitted on the selection's vertex sample: ``map`` is
+            the nearest row of ``Phi`` to each row of ``Phi C_r``. ``(0, 0)`` when
+            ``refine_iters == 0``.
         eigenvalues: ``(k,)`` Laplace-Beltrami eigenvalues of the mesh scaled to unit area.
-        pairs: ``(P, 2)`` int64 sparse pairs of symmetric feature points (input indices).
+        pairs: ``(P, 2)`` int64 sparse pairs of symmetric feature points (input indices)
+            of the chosen pairing (the thesis's pairing when the orientation hypothesis
+            was chosen).
         feature_points: ``(d,)`` int64 HKS feature points (input indices).
         timings: seconds per stage (``validate``, ``eigen``, ``features``, ``pairs``,
-            ``signs``, ``correction``, ``map``, summed over the pairing hypotheses, and
-            ``refine``) and ``total``.
+            ``signs``, ``correction``, ``map``, summed over the pairing hypotheses,
+            ``orientation``, ``select`` and ``refine``) and ``total``.
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the component that was solved.
         correction_converged: whether every trust-region run stopped on its own tests
             (True when the correction is off).
+        hypothesis: which hypothesis gave the map: ``"pairs"`` (the thesis's method),
+            ``"hks_pairs"`` (pairs on HKS alone) or ``"orientation"`` (the
+            orientation-reversing functional map).
         notes: what the solver did that a caller should know (e.g. dropped components).
     """
 
@@ -123,6 +139,7 @@ class IntrinsicSymmetryResult(Result):
     num_components: int
     dropped_vertices: int
     correction_converged: bool
+    hypothesis: str = "pairs"
     notes: tuple[str, ...] = ()
 
     def write_artifacts(self, data: Any, out_dir: Path, stem: str) -> list[Path]:
@@ -192,6 +209,140 @@ def map_quality(evecs: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> 
     return float(np.linalg.norm(c.T @ c - eye) + np.linalg.norm(c @ c - eye))
 
 
+_HYPOTHESIS_TEXT = {
+    "pairs": "thesis's pairs",
+    "hks_pairs": "pairs on HKS alone (spectral_weight 0)",
+    "orientation": "orientation-reversing functional map",
+}
+
+
+@dataclasses.dataclass
+class _Candidate:
+    """One hypothesis of the symmetry: its map sends vertex ``i`` to the row of ``target`` nearest ``query[i]``."""
+
+    name: str
+    pairs: np.ndarray
+    fmap: np.ndarray
+    rotation: np.ndarray
+    converged: bool
+    target: np.ndarray
+    query: np.ndarray
+    usable: bool
+    notes: list[str]
+    refined: np.ndarray | None = None
+    rows_image: np.ndarray | None = None
+
+
+def _fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Least-squares functional map ``C`` with ``Phi[rows] C ~ Phi[T(rows)]``, area-weighted.
+
+    On every vertex with area weights this is ``Phi^T A Phi[T]`` (:func:`pointwise_to_functional`);
+    on a vertex sample the least-squares form also corrects for the sampled basis not
+    being orthonormal.
+    """
+    root = np.sqrt(weights)[:, None]
+    return np.linalg.lstsq(root * phi_rows, root * phi_image, rcond=None)[0]
+
+
+def _involution_defect(fmap: np.ndarray) -> float:
+    """``|C^T C - I|_F + |C C - I|_F``: 0 for the functional map of an isometric involution."""
+    eye = np.eye(fmap.shape[0])
+    return float(np.linalg.norm(fmap.T @ fmap - eye) + np.linalg.norm(fmap @ fmap - eye))
+
+
+def _sampled_zoomout(
+    big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: dict
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """ZoomOut (Melzi et al. 2019) on the vertex sample ``rows``: returns the sample's image and the last ``C``.
+
+    Each round fits ``C`` in the first ``kk`` eigenfunctions from the sample's current
+    images (:func:`_fit_functional`) and maps each sampled vertex to the nearest row of
+    ``Phi`` to its row of ``Phi C``. With 1,000 samples this matched full ZoomOut to
+    0.1 point of correspondence rate on FAUST, TOSCA and the synthetic meshes, at a
+    fraction of the nearest-neighbour queries.
+    """
+    fitted = None
+    for kk in ks:
+        phi = big[:, :kk]  # (V, kk)
+        fitted = _fit_functional(phi[rows], phi[image], area[rows])  # (kk, kk)
+        image = trees[int(kk)].query(phi[rows] @ fitted, k=1)[1].astype(np.int64)
+    return image, fitted
+
+
+# Share of vertices a map may leave near themselves (GeodesicProbe.near_self). The true
+# symmetries of the benchmark's meshes leave 11-42 % (FAUST 17-24 %, TOSCA's cats, dogs and
+# horses about 30 %, a camel 42 %); the partial identities seen there 66-100 %.
+_NEAR_SELF_LIMIT = 0.6
+
+
+class GeodesicProbe:
+    """Sampled geodesic tests of a self map on the unit-area mesh.
+
+    :meth:`distortion`: ``mean |d(x, y) - d(T x, T y)| / mean d(x, y)`` with ``x`` over
+    ``n_sources`` vertices and ``y`` over ``n_targets`` vertices, both drawn from ``rows``
+    (the vertices where the maps are known); an isometry scores 0.
+
+    :meth:`near_self`: the share of ``n_balls`` vertices of ``rows`` that the map leaves
+    within ``radius`` of themselves (the correspondence-rate tolerance of thesis Sec.
+    6.3.2, ``sqrt(1 / (20 pi))`` on a unit-area mesh). A reflection moves all but a band
+    along its symmetry curve (17-24 % of the vertices on FAUST, up to 42 % on a thin
+    camel); a map that leaves most of the shape in place is (partly) the identity, which
+    the other tests would score as a perfect isometry. Geodesic, not Euclidean: the legs of a cat are close in space but
+    far on the surface.
+
+    Distances are Dijkstra's on the edge graph.
+    """
+
+    def __init__(
+        self,
+        graph,
+        rows: np.ndarray,
+        rng: np.random.Generator,
+        n_sources: int = 16,
+        n_targets: int = 400,
+        n_balls: int = 100,
+        radius: float = math.sqrt(1.0 / (20.0 * math.pi)),
+    ):
+        pick = rng.permutation(rows.size)
+        self.src = pick[: min(n_sources, rows.size)]  # positions in rows
+        self.dst = pick[: min(n_targets, rows.size)]
+        self.ball_rows = pick[: min(n_balls, rows.size)]
+        self.graph, self.rows, self.radius = graph, rows, radius
+        self.base = geodesic_distances(graph, rows[self.src])[:, rows[self.dst]]  # (s, t)
+        self.scale = max(float(np.mean(self.base)), np.finfo(float).tiny)
+        self.balls = geodesic_distances(graph, rows[self.ball_rows], limit=radius)  # (b, V), inf beyond
+
+    def distortion(self, image: np.ndarray) -> float:
+        """``image``: ``(S,)`` the map's value at each of ``rows``."""
+        mapped = geodesic_distances(self.graph, image[self.src])[:, image[self.dst]]  # (s, t)
+        return float(np.mean(np.abs(mapped - self.base)) / self.scale)
+
+    def near_self(self, image: np.ndarray) -> float:
+        """``image``: ``(S,)`` the map's value at each of ``rows``."""
+        moved = self.balls[np.arange(self.ball_rows.size), image[self.ball_rows]]  # (b,)
+        return float(np.mean(moved < self.radius))
+
+
+def _rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
+    """The row with the smallest sum of ranks over the columns (ties: the earlier row).
+
+    Rows of ``inf`` (unusable hypotheses) rank last; when every row is ``inf`` the first
+    wins. A winner other than row 0 must also have a last column (the geodesic
+    distortion) below ``max_distortion`` and below row 0's, or row 0 is kept.
+    """
+    n = table.shape[0]
+    ranks = np.zeros(n)
+    for col in table.T:
+        order = np.argsort(col, kind="stable")
+        ranks[order] += np.arange(n)
+    ranks[~np.isfinite(table).all(axis=1)] = np.inf
+    if not np.isfinite(ranks).any():
+        return 0
+    best = int(np.argmin(ranks))
+    distortion = table[:, -1]
+    return best if best == 0 or distortion[best] < min(max_distortion, distortion[0]) else 0
+
+
 def _sign_hypotheses(
     emb: np.ndarray,
     signs: np.ndarray,
@@ -248,6 +399,9 @@ def intrinsic_symmetry(
     min_confidence: float = 0.0,
     sign_hypotheses: int = 3,
     pairing_hypotheses: bool = True,
+    orientation_hypothesis: bool = True,
+    select_samples: int = 1000,
+    max_distortion: float = 0.08,
     correct: bool = True,
     mu: float = 0.01,
     max_iter: int = 50,
@@ -266,8 +420,7 @@ def intrinsic_symmetry(
     4. Up to ``max_pairs`` symmetric pairs of feature points by the integer program of
        Eq. 6.1 on HKS (``n_times`` scales) and sign-vector affinities, checked for
        consistency with an isometry (:func:`symmetric_pairs`); with
-       ``pairing_hypotheses`` also on HKS alone, steps 5-7 run for both and the better
-       map is kept.
+       ``pairing_hypotheses`` also on HKS alone, and steps 5-7 run for both.
     5. ``C = diag(s)`` from the eigenfunctions' restrictions to geodesics between pairs
        (Sec. 6.2.5) and, with ``cross_pairs``, between two pairs.
     6. With ``correct``, the rotation ``R`` of Eq. 6.4 (``mu``) by the Riemannian trust-region
@@ -280,9 +433,23 @@ def intrinsic_symmetry(
        thesis's signs only when it is clearly (``< 0.6x``) more consistent. The search runs
        only when the thesis's map is itself inconsistent; it costs ``2^m`` approximate
        nearest-neighbour queries of 800 points.
-    8. ``refine_iters`` rounds of ZoomOut (Melzi et al. 2019, an extension): the
-       functional map of the current point map in a basis growing from ``k`` to
-       ``refine_k`` eigenfunctions, and the point map it implies.
+    8. With ``orientation_hypothesis`` (an extension), a third map from the
+       orientation-reversing functional map fitted to the dense HKS
+       (:func:`~torchsym.mesh.orientation.orientation_reversing_map`, Ren et al. 2018).
+    9. Choice of a hypothesis on ``select_samples`` seeded vertices: each map is refined
+       there by ZoomOut and scored by three tests of an isometric involution: the
+       defect ``|C^T C - I| + |C C - I|`` of its functional map in ``k`` and in
+       ``refine_k`` eigenfunctions, and its geodesic distortion (16 x 400 sampled
+       distances). The smallest sum of ranks wins, but a hypothesis other than the
+       thesis's must also distort geodesics less than the thesis's map does and less than
+       ``max_distortion``: the geodesic test is the direct one, while the functional
+       defects also reward other near-isometric involutions of nearly ambiguous shapes.
+       Maps that leave 60 % of the sample within the correspondence tolerance of itself
+       (partly the identity, before or after refinement) never win.
+    10. ``refine_iters`` rounds of ZoomOut (Melzi et al. 2019, an extension): the
+        functional map of the current point map in a basis growing from ``k`` to
+        ``refine_k`` eigenfunctions, and the point map it implies. The rounds run on the
+        selection's vertex sample and the last one maps every vertex.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
@@ -303,19 +470,37 @@ def intrinsic_symmetry(
             ``benchmarks/bench_mesh.py``) the default 3 raised the correspondence rate from
             93.3 % to 93.7 % and from 87.3 % to 88.6 %.
         pairing_hypotheses: also pair the feature points on HKS alone (``spectral_weight``
-            0) and keep, of the two maps (after step 7), the one closer to an isometric
-            involution (:func:`map_quality`; a pairing without pairs never wins). The
+            0) as a second hypothesis for step 9 (a pairing without pairs never wins). The
             ``phi^2`` term of the affinity helps on most shapes but misleads where the
             low eigenfunctions are bent out of symmetry: on the benchmark's synthetic bent
             meshes this took the rate from 70.6 % to 75.1 % (FAUST and TOSCA within 0.1
-            point; with holes FAUST 46.0 -> 49.3 %, TOSCA 41.1 -> 37.4 %). Costs a second
-            run of steps 4-7, about 0.1 s on 5,000 vertices.
+            point; with holes FAUST 46.0 -> 49.3 %, TOSCA 41.1 -> 37.4 %; measured when the
+            two were compared by :func:`map_quality` alone). Costs a second run of steps
+            4-7, about 0.1 s on 5,000 vertices.
+        orientation_hypothesis: add the orientation-reversing functional map as a
+            hypothesis (step 8). The thesis's map fails where its few sparse pairs are
+            wrong or an eigenspace is nearly repeated; the dense fit has no such single
+            point of failure but is less accurate where it succeeds. With the choice of
+            step 9, on the benchmark (every 2nd FAUST/TOSCA shape,
+            ``benchmarks/bench_mesh.py --step 2``) the rate went from 76.9 % to 91.2 % on
+            the synthetic meshes, 91.1 % to 92.1 % on TOSCA, and stayed at 94.9 % on FAUST.
+            Costs about 0.05 s at 12,900 vertices.
+        select_samples: vertices on which the hypotheses are refined and compared (step 9).
+            With 1,000, ZoomOut on the sample matched full ZoomOut to 0.1 point of
+            correspondence rate on FAUST, TOSCA and the synthetic meshes.
+        max_distortion: largest sampled geodesic distortion (a mean relative error of
+            distances) with which a hypothesis may replace the thesis's pairs. True
+            symmetries score 0.02-0.05 on FAUST and about 0.1 on TOSCA's cats, whose
+            poses are far from isometric; there a wrong orientation-reversing map (front
+            legs to hind legs) scored as well as the true one. Results were the same for
+            any value in [0.06, 0.10] on the benchmark; 0.08 is the middle.
         correct: run the eigenfunction correction (Sec. 6.2.6).
         min_confidence: eigenfunctions whose sign evidence is weaker than this are left
             out of ``C`` (see :func:`eigenfunction_signs`; 0 is the thesis's rule).
         refine_iters: rounds of ZoomOut after the dense map (an extension; 0 is the thesis's
-            method). Each round takes the full functional map of the current point map,
-            ``C = Phi^T A Phi[T]`` (``A`` the lumped areas), in a basis of ``k_r``
+            method). Each round fits the functional map of the current point map,
+            ``C = Phi^T A Phi[T]`` (``A`` the lumped areas; by area-weighted least squares
+            on the vertex sample of step 9), in a basis of ``k_r``
             eigenfunctions, ``k_r`` rising evenly from ``n_eigen`` to ``refine_k``, and maps
             every vertex to the nearest row of ``Phi`` to its row of ``Phi C``. The thesis's
             diagonal ``C`` in 13 eigenfunctions cannot follow shapes that are only nearly
@@ -352,8 +537,11 @@ def intrinsic_symmetry(
     refine_iters = check_int(refine_iters, "refine_iters", minimum=0)
     refine_k = max(check_int(refine_k, "refine_k", minimum=1), n_eigen) if refine_iters else n_eigen
     sign_hypotheses = check_int(sign_hypotheses, "sign_hypotheses", minimum=0)
-    if not isinstance(pairing_hypotheses, bool):
-        raise InputValueError(f"pairing_hypotheses: expected True or False, got {pairing_hypotheses!r}")
+    select_samples = check_int(select_samples, "select_samples", minimum=50)
+    max_distortion = check_positive(max_distortion, "max_distortion")
+    for flag_name, flag in (("pairing_hypotheses", pairing_hypotheses), ("orientation_hypothesis", orientation_hypothesis)):
+        if not isinstance(flag, bool):
+            raise InputValueError(f"{flag_name}: expected True or False, got {flag!r}")
     max_pair_cost = check_positive(max_pair_cost, "max_pair_cost")
     feature_radius = check_positive(feature_radius, "feature_radius", allow_zero=True)
     penalty = check_positive(penalty, "penalty")
@@ -405,7 +593,7 @@ def intrinsic_symmetry(
     for k_ in ("pairs", "signs", "correction", "map"):
         timings[k_] = 0.0
     timings["pairs"] = t_shared
-    candidates = []
+    candidates: list[_Candidate] = []
     for weight in weights:
         cand_notes: list[str] = []
         tic = time.perf_counter()
@@ -440,40 +628,89 @@ def intrinsic_symmetry(
             signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng)
             if q_chosen < q_thesis:
                 cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
-        vmap = _dense_map(emb, signs)  # (V',)
-        # a map without an odd eigenfunction, or fixing most vertices, is (near) the
-        # identity, which map_quality scores as perfect: it never wins
-        fixed = float(np.mean(vmap == np.arange(vmap.shape[0])))
-        usable = pairs.shape[0] and bool((signs < 0).any()) and fixed < 0.5
-        quality = map_quality(evecs, area, vmap) if usable else math.inf
-        timings["map"] += time.perf_counter() - tic
-        candidates.append((quality, weight, pairs, signs, rotation, converged, vmap, cand_notes))
-    best = min(range(len(candidates)), key=lambda i: candidates[i][0])  # ties: the first (the setting given)
-    quality, weight, pairs, signs, rotation, converged, vmap, cand_notes = candidates[best]
-    notes.extend(cand_notes)
-    if weight != spectral_weight:
-        notes.append(
-            f"pairs from HKS alone (spectral_weight 0): their map is closer to an isometric involution "
-            f"({quality:.3f} against {candidates[0][0]:.3f})"
+        use = signs != 0
+        # a map without an odd eigenfunction is the identity, which every test scores as perfect
+        usable = bool(pairs.shape[0]) and bool((signs < 0).any())
+        name = "pairs" if weight == spectral_weight else "hks_pairs"
+        candidates.append(
+            _Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
         )
-    tic = time.perf_counter()
+        timings["map"] += time.perf_counter() - tic
+    if orientation_hypothesis:
+        tic = time.perf_counter()
+        dense_desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))  # (V', h)
+        fmap = orientation_reversing_map(v, f, evals, evecs, area, dense_desc)  # (k, k)
+        candidates.append(
+            _Candidate("orientation", candidates[0].pairs, fmap, np.eye(n_eigen), True, evecs @ fmap.T, evecs, True, [])
+        )
+        timings["orientation"] = time.perf_counter() - tic
 
+    # choose a hypothesis on a vertex sample: each one's map, refined by sampled ZoomOut,
+    # scored by three tests of an isometric involution
+    tic = time.perf_counter()
+    rng = numpy_rng(gen)
+    rows = np.sort(rng.choice(n, size=min(n, select_samples), replace=False))  # (S,)
+    ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
+    trees = {int(kk): cKDTree(big[:, :kk]) for kk in ks}
+    probe = GeodesicProbe(graph, rows, rng)
+    scores, seen = [], []
+    for cand in candidates:
+        image = cKDTree(cand.target).query(cand.query[rows], k=1)[1].astype(np.int64)  # (S,)
+        duplicate = any(np.array_equal(image, other) for other in seen)
+        seen.append(image)
+        if not cand.usable or probe.near_self(image) >= _NEAR_SELF_LIMIT or duplicate:
+            scores.append(np.full(3, np.inf))
+            continue
+        refined, fitted = _sampled_zoomout(big, area, rows, image, ks, trees)
+        if probe.near_self(refined) >= _NEAR_SELF_LIMIT:
+            # ZoomOut drifted to the identity, which every test scores as perfect
+            cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
+            scores.append(np.full(3, np.inf))
+            continue
+        cand.refined, cand.rows_image = fitted, refined
+        phi_k = evecs[rows]
+        c_k = _fit_functional(phi_k, evecs[refined], area[rows])
+        c_r = _fit_functional(big[rows], big[refined], area[rows])
+        scores.append(np.array([_involution_defect(c_k), _involution_defect(c_r), probe.distortion(refined)]))
+    table = np.stack(scores)  # (H, 3)
+    best = _rank_choice(table, max_distortion)
+    timings["select"] = time.perf_counter() - tic
+    chosen = candidates[best]
+    for cand, row in zip(candidates, table):
+        logger.debug("hypothesis %s: defects %s", cand.name, np.round(row, 4))
+    notes.extend(chosen.notes)
+    if not np.isfinite(table[best]).all() and chosen.usable:
+        notes.append(
+            "no hypothesis passed the tests of an isometric involution (each left most of the shape "
+            "in place, or distorted geodesics by more than max_distortion): the thesis's map is "
+            "returned unrefined and is unreliable"
+        )
+    if best != 0:
+        notes.append(
+            f"map from the {_HYPOTHESIS_TEXT[chosen.name]}: ranked first on the tests of an isometric involution "
+            f"(defects {np.array2string(table[best], precision=3)} against {np.array2string(table[0], precision=3)} "
+            f"for the thesis's pairs)"
+        )
+
+    tic = time.perf_counter()
+    vmap = cKDTree(chosen.target).query(chosen.query, k=1)[1].astype(np.int64)  # (V',) the thesis's dense map
+    timings["map"] += time.perf_counter() - tic
     coarse_map = vmap
     full = np.zeros((0, 0))
-    if refine_iters:
-        # ZoomOut: point map -> functional map in a larger basis -> point map
-        for kk in np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:]:
-            phi = big[:, :kk]  # (V', kk)
-            full = pointwise_to_functional(phi, area, vmap)  # (kk, kk)
-            vmap = cKDTree(phi).query(phi @ full, k=1)[1].astype(np.int64)
+    if refine_iters and chosen.refined is not None:
+        tic = time.perf_counter()
+        full = chosen.refined  # (k_r, k_r), fitted on the sample
+        vmap = trees[int(ks[-1])].query(big[:, : ks[-1]] @ full, k=1)[1].astype(np.int64)
         timings["refine"] = time.perf_counter() - tic
+    pairs, fmap, rotation, converged = chosen.pairs, chosen.fmap, chosen.rotation, chosen.converged
+    hypothesis = chosen.name
 
     timings["total"] = time.perf_counter() - t_start
 
     to_input = checked.vertex_index.numpy()
     return IntrinsicSymmetryResult(
         map=checked.map_to_input(torch.from_numpy(vmap)),
-        functional_map=torch.diag(torch.from_numpy(signs)),
+        functional_map=torch.from_numpy(np.ascontiguousarray(fmap)),
         rotation=torch.from_numpy(rotation),
         map_before_refine=checked.map_to_input(torch.from_numpy(coarse_map)),
         refined_functional_map=torch.from_numpy(np.ascontiguousarray(full)),
@@ -484,6 +721,7 @@ def intrinsic_symmetry(
         num_components=checked.num_components,
         dropped_vertices=checked.dropped_vertices,
         correction_converged=bool(converged),
+        hypothesis=hypothesis,
         notes=tuple(notes),
     )
 
@@ -520,6 +758,9 @@ class IntrinsicSymmetry(nn.Module):
         min_confidence: float = 0.0,
         sign_hypotheses: int = 3,
         pairing_hypotheses: bool = True,
+        orientation_hypothesis: bool = True,
+        select_samples: int = 1000,
+        max_distortion: float = 0.08,
         correct: bool = True,
         mu: float = 0.01,
         max_iter: int = 50,
@@ -537,10 +778,18 @@ class IntrinsicSymmetry(nn.Module):
         self.max_pair_cost = check_positive(max_pair_cost, "max_pair_cost")
         self.penalty = check_positive(penalty, "penalty")
         self.spectral_weight = check_positive(spectral_weight, "spectral_weight", allow_zero=True)
-        for name, flag in (("cross_pairs", cross_pairs), ("correct", correct), ("pairing_hypotheses", pairing_hypotheses)):
+        for name, flag in (
+            ("cross_pairs", cross_pairs),
+            ("correct", correct),
+            ("pairing_hypotheses", pairing_hypotheses),
+            ("orientation_hypothesis", orientation_hypothesis),
+        ):
             if not isinstance(flag, bool):
                 raise InputValueError(f"{name}: expected True or False, got {flag!r}")
         self.cross_pairs, self.correct, self.pairing_hypotheses = cross_pairs, correct, pairing_hypotheses
+        self.orientation_hypothesis = orientation_hypothesis
+        self.select_samples = check_int(select_samples, "select_samples", minimum=50)
+        self.max_distortion = check_positive(max_distortion, "max_distortion")
         self.min_confidence = check_positive(min_confidence, "min_confidence", allow_zero=True)
         self.mu = check_positive(mu, "mu", allow_zero=True)
         self.max_iter = check_int(max_iter, "max_iter", minimum=1)
@@ -568,6 +817,9 @@ class IntrinsicSymmetry(nn.Module):
             min_confidence=self.min_confidence,
             sign_hypotheses=self.sign_hypotheses,
             pairing_hypotheses=self.pairing_hypotheses,
+            orientation_hypothesis=self.orientation_hypothesis,
+            select_samples=self.select_samples,
+            max_distortion=self.max_distortion,
             correct=self.correct,
             mu=self.mu,
             max_iter=self.max_iter,
@@ -581,5 +833,6 @@ class IntrinsicSymmetry(nn.Module):
         return (
             f"n_eigen={self.n_eigen}, n_times={self.n_times}, max_pairs={self.max_pairs}, "
             f"correct={self.correct}, mu={self.mu}, sign_hypotheses={self.sign_hypotheses}, "
+            f"orientation_hypothesis={self.orientation_hypothesis}, "
             f"refine_iters={self.refine_iters}, refine_k={self.refine_k}, seed={self.seed}"
         )
