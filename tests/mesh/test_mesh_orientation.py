@@ -64,7 +64,7 @@ def test_orientation_operator_flips_sign_with_the_surface_orientation(spectral_b
 
 
 def test_orientation_reversing_map_recovers_the_mirror(spectral_blob):
-    v, f, evals, evecs, area, hks, gt, true_c = spectral_blob
+    v, f, evals, evecs, area, hks, gt, _ = spectral_blob
     fmap = orientation_reversing_map(v, f, evals, evecs, area, hks)
     assert fmap.shape == (13, 13)
     np.testing.assert_allclose(fmap[:, 0], np.eye(13)[0])  # constants map to constants
@@ -119,3 +119,12 @@ def test_rank_choice_rules():
     assert _rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.05]]), 0.08) == 1
     assert _rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.30]]), 0.08) == 0
     assert _rank_choice(np.array([[inf, inf, inf], [inf, inf, inf]]), 0.08) == 0
+
+
+def test_has_boundary(blob):
+    from torchsym.mesh.intrinsic import _has_boundary
+
+    mesh, _ = blob
+    faces = mesh.faces.numpy()
+    assert not _has_boundary(faces)  # a closed sphere
+    assert _has_boundary(faces[1:])  # one triangle removed: a hole

@@ -56,9 +56,8 @@ class Mesh:
                 raise InputShapeError(f"faces: expected (F, 3) integer vertex indices, got {type(faces).__name__} ({exc})") from None
         if not (f.is_floating_point() or f.dtype in (torch.int8, torch.int16, torch.int32, torch.int64, torch.uint8)):
             raise InputShapeError(f"faces: expected (F, 3) integer vertex indices, got dtype {f.dtype}")
-        if f.is_floating_point():
-            if f.numel() and not bool((f == f.round()).all()):
-                raise InputShapeError("faces: expected integer vertex indices, got non-integer values")
+        if f.is_floating_point() and f.numel() and not bool((f == f.round()).all()):
+            raise InputShapeError("faces: expected integer vertex indices, got non-integer values")
         return cls(v, f.to(torch.int64).reshape(-1, 3) if f.numel() == 0 else f.to(torch.int64))
 
     @property
