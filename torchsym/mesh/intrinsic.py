@@ -119,8 +119,9 @@ class IntrinsicSymmetryResult(Result):
             ``orientation``, ``select`` and ``refine``) and ``total``.
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the component that was solved.
-        correction_converged: whether every trust-region run stopped on its own tests
-            (True when the correction is off).
+        correction_converged: whether every trust-region run of the chosen hypothesis
+            stopped on its own tests (True when the correction is off, or for the
+            orientation-reversing hypothesis, which has no correction).
         hypothesis: which hypothesis gave the map: ``"pairs"`` (the thesis's method),
             ``"hks_pairs"`` (pairs on HKS alone) or ``"orientation"`` (the
             orientation-reversing functional map).
@@ -454,8 +455,8 @@ def intrinsic_symmetry(
        ``max_distortion`` (``max_distortion_open`` on a mesh with boundary): the geodesic
        test is the direct one, while the functional defects also reward other
        near-isometric involutions of nearly ambiguous shapes.
-       Maps that leave 60 % of the sample within the correspondence tolerance of itself
-       (partly the identity, before or after refinement) never win.
+       Maps that leave 60 % of 100 sampled vertices within the correspondence tolerance
+       of themselves (partly the identity, before or after refinement) never win.
     10. ``refine_iters`` rounds of ZoomOut (Melzi et al. 2019, an extension): the
         functional map of the current point map in a basis growing from ``k`` to
         ``refine_k`` eigenfunctions, and the point map it implies. The rounds run on the
@@ -495,7 +496,9 @@ def intrinsic_symmetry(
             ``benchmarks/bench_mesh.py --step 2``) the rate went from 76.9 % to 91.2 % on
             the synthetic meshes, 91.1 % to 92.1 % on TOSCA, and stayed at 94.9 % on FAUST.
             Costs about 0.05 s at 12,900 vertices.
-        select_samples: vertices on which the hypotheses are refined and compared (step 9).
+        select_samples: vertices on which the hypotheses are refined and compared (step 9);
+            raised to ``4 * refine_k`` when smaller, with a note, so that the
+            least-squares fits stay determined.
             With 1,000, ZoomOut on the sample matched full ZoomOut to 0.1 point of
             correspondence rate on FAUST, TOSCA and the synthetic meshes.
         max_distortion: largest sampled geodesic distortion (a mean relative error of
@@ -520,7 +523,8 @@ def intrinsic_symmetry(
             ``C = Phi^T A Phi[T]`` (``A`` the lumped areas; by area-weighted least squares
             on the vertex sample of step 9), in a basis of ``k_r``
             eigenfunctions, ``k_r`` rising evenly from ``n_eigen`` to ``refine_k``, and maps
-            every vertex to the nearest row of ``Phi`` to its row of ``Phi C``. The thesis's
+            each sampled vertex to the nearest row of ``Phi`` to its row of ``Phi C``; the
+            last round's ``C`` maps every vertex. The thesis's
             diagonal ``C`` in 13 eigenfunctions cannot follow shapes that are only nearly
             isometric (on FAUST the true ``C`` has mean ``|C_ii|`` 0.6-0.8); the free ``C``
             in a larger basis can. With the default 4 rounds to 25 eigenfunctions the
@@ -599,7 +603,8 @@ def intrinsic_symmetry(
     graph = edge_graph(v, f)
     features = hks_feature_points(hks_th, ring_neighbourhood(f, n, rings=2))  # (d,)
     features = thin_points(graph, features, feature_radius)[:max_features]  # (d,)
-    desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))[features]  # (d, h)
+    dense_desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))  # (V', h)
+    desc = dense_desc[features]  # (d, h)
     timings["features"], tic = time.perf_counter() - tic, time.perf_counter()
 
     tic = time.perf_counter()
@@ -657,7 +662,6 @@ def intrinsic_symmetry(
         timings["map"] += time.perf_counter() - tic
     if orientation_hypothesis:
         tic = time.perf_counter()
-        dense_desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))  # (V', h)
         fmap = orientation_reversing_map(v, f, evals, evecs, area, dense_desc)  # (k, k)
         candidates.append(
             _Candidate("orientation", candidates[0].pairs, fmap, np.eye(n_eigen), True, evecs @ fmap.T, evecs, True, [])
@@ -668,7 +672,10 @@ def intrinsic_symmetry(
     # scored by three tests of an isometric involution
     tic = time.perf_counter()
     rng = numpy_rng(gen)
-    rows = np.sort(rng.choice(n, size=min(n, select_samples), replace=False))  # (S,)
+    n_rows = max(select_samples, 4 * refine_k)  # the least-squares fits have refine_k unknowns per column
+    if n_rows > select_samples and n > select_samples:
+        notes.append(f"select_samples raised from {select_samples} to {min(n, n_rows)}, 4 x refine_k")
+    rows = np.sort(rng.choice(n, size=min(n, n_rows), replace=False))  # (S,)
     ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
     trees = {int(kk): cKDTree(big[:, :kk]) for kk in ks}
     probe = GeodesicProbe(graph, rows, rng)
@@ -678,20 +685,22 @@ def intrinsic_symmetry(
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         if not cand.usable or probe.near_self(image) >= _NEAR_SELF_LIMIT or duplicate:
-            scores.append(np.full(3, np.inf))
+            scores.append(np.full(3 if refine_k > n_eigen else 2, np.inf))
             continue
         refined, fitted = _sampled_zoomout(big, area, rows, image, ks, trees)
         if probe.near_self(refined) >= _NEAR_SELF_LIMIT:
             # ZoomOut drifted to the identity, which every test scores as perfect
             cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
-            scores.append(np.full(3, np.inf))
+            scores.append(np.full(3 if refine_k > n_eigen else 2, np.inf))
             continue
         cand.refined, cand.rows_image = fitted, refined
         phi_k = evecs[rows]
         c_k = _fit_functional(phi_k, evecs[refined], area[rows])
-        c_r = _fit_functional(big[rows], big[refined], area[rows])
-        scores.append(np.array([_involution_defect(c_k), _involution_defect(c_r), probe.distortion(refined)]))
-    table = np.stack(scores)  # (H, 3)
+        defects = [_involution_defect(c_k)]
+        if refine_k > n_eigen:  # else the same defect twice
+            defects.append(_involution_defect(_fit_functional(big[rows], big[refined], area[rows])))
+        scores.append(np.array([*defects, probe.distortion(refined)]))
+    table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
     best = _rank_choice(table, max_distortion_open if _has_boundary(f) else max_distortion)
     timings["select"] = time.perf_counter() - tic
     chosen = candidates[best]
@@ -716,6 +725,8 @@ def intrinsic_symmetry(
     timings["map"] += time.perf_counter() - tic
     coarse_map = vmap
     full = np.zeros((0, 0))
+    if refine_iters:
+        timings["refine"] = 0.0
     if refine_iters and chosen.refined is not None:
         tic = time.perf_counter()
         full = chosen.refined  # (k_r, k_r), fitted on the sample

@@ -23,15 +23,21 @@ the operators of multiplication by descriptor ``p`` and ``O_p`` its orientation
 operators. The energy is a quadratic in ``k^2`` unknowns, so it is minimised exactly by
 one ``k^2 x k^2`` linear solve (0.2 ms at ``k = 13``) instead of by L-BFGS as pyFM does;
 on the benchmark's synthetic meshes both reach the same minimiser (to 1e-2 in Frobenius
-norm). Each weight is divided by the term's expected value under a uniformly random
-orthogonal ``C`` (and the descriptor terms by the effective number of independent
-descriptors), so that the weights compare terms of equal scale.
+norm). Each commutativity weight is divided by the term's expected value under a
+uniformly random orthogonal ``C``, the Laplacian weight likewise, and the descriptor
+weight by ``|B|^2`` (half that expectation; the same normalisations as pyFM's canonical
+weights, so that the default weights mean what they mean there); the descriptor terms
+are also divided by the effective number of independent descriptors, so that the weights
+compare terms of equal scale.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import cKDTree
+
+from torchsym.core.checks import check_positive
+from torchsym.errors import InputShapeError, InputValueError, SolverError
 
 __all__ = [
     "descriptor_operators",
@@ -93,7 +99,6 @@ def orientation_operators(
         evecs: ``(V, k)`` eigenfunctions ``Phi``.
         functions: ``(V, p)`` the functions ``f_p``.
     """
-    grads, normal, face_area = _hat_gradients(vertices, faces)  # (F, 3, 3), (F, 3), (F,)
     grads, normal, face_area = _hat_gradients(vertices, faces)  # (F, 3, 3), (F, 3), (F,)
     corner_phi = evecs[faces]  # (F, 3, k)
     grad_phi = np.matmul(grads.transpose(0, 2, 1), corner_phi)  # (F, 3, k)
@@ -167,18 +172,41 @@ def orientation_reversing_map(
         evecs: ``(V, k)`` area-orthonormal eigenfunctions, the first one constant.
         area: ``(V,)`` lumped vertex areas.
         descriptors: ``(V, p)`` functions preserved by the symmetry (e.g. the HKS); each
-            is scaled to unit area-weighted L2 norm first.
+            is scaled to unit area-weighted L2 norm first, so the result does not depend
+            on the order or the scale of the columns.
         w_descriptor, w_laplacian, w_commutation, w_orientation: relative weights of the
             four terms (only their ratios matter).
         gamma: exponent of the resolvent mask (:func:`resolvent_mask`).
+
+    Raises:
+        InputValueError: negative or all-zero weights, a non-positive ``gamma``, or no
+            usable (finite, non-zero) descriptor.
+        InputShapeError: ``descriptors`` without one row per vertex.
+        SolverError: a singular system (possible only with ``w_laplacian = 0``).
 
     Returns:
         ``C`` such that ``Phi C^T`` at a vertex's mirror is close to ``Phi`` at the vertex;
         :func:`functional_to_pointwise` turns it into a point map.
     """
     k = evecs.shape[1]
+    weights = np.array(
+        [check_positive(w, name, allow_zero=True) for w, name in (
+            (w_descriptor, "w_descriptor"), (w_laplacian, "w_laplacian"),
+            (w_commutation, "w_commutation"), (w_orientation, "w_orientation"),
+        )],
+        dtype=np.float64,
+    )
+    if not weights.sum() > 0:
+        raise InputValueError("w_descriptor, w_laplacian, w_commutation, w_orientation: expected a positive sum, got 0")
+    gamma = check_positive(gamma, "gamma")
     desc = np.asarray(descriptors, dtype=np.float64)
+    if desc.ndim != 2 or desc.shape[0] != evecs.shape[0]:
+        raise InputShapeError(f"descriptors: expected ({evecs.shape[0]}, p), one row per vertex, got {tuple(desc.shape)}")
+    if not np.isfinite(desc).all():
+        raise InputValueError("descriptors: expected finite values, got NaN or inf")
     norms = np.sqrt((area[:, None] * desc**2).sum(axis=0))  # (p,)
+    if not (norms > 0).any():
+        raise InputValueError("descriptors: expected at least one non-zero descriptor, got none")
     desc = desc[:, norms > 0] / norms[norms > 0]
     # Every term depends on the descriptors only through sum_p f_p f_p^T, so an
     # area-orthogonal basis of their span gives the same energy with fewer columns (the
@@ -186,7 +214,6 @@ def orientation_reversing_map(
     gram_f, basis = np.linalg.eigh(desc.T @ (area[:, None] * desc))  # (p,), (p, p)
     keep = gram_f > 1e-12 * max(float(gram_f.max()), np.finfo(float).tiny)
     desc = desc @ basis[:, keep]  # (V, r), sum of outer products unchanged
-    weights = np.array([w_descriptor, w_laplacian, w_commutation, w_orientation], dtype=np.float64)
     weights = weights / weights.sum()
     b = evecs.T @ (area[:, None] * desc)  # (k, p) descriptors in the eigenbasis
     # effective number of independent descriptors, (tr G)^2 / |G|^2 with G = B^T B (no constant)
@@ -215,7 +242,10 @@ def orientation_reversing_map(
     x = np.zeros(k * k)
     x[0] = 1.0
     rhs = lin[~fixed] - quad[np.ix_(~fixed, fixed)] @ x[fixed]
-    x[~fixed] = np.linalg.solve(quad[np.ix_(~fixed, ~fixed)], rhs)
+    try:
+        x[~fixed] = np.linalg.solve(quad[np.ix_(~fixed, ~fixed)], rhs)
+    except np.linalg.LinAlgError as exc:
+        raise SolverError(f"orientation_reversing_map: the quadratic system is singular ({exc}); raise w_laplacian") from exc
     return x.reshape(k, k)
 
 
