@@ -161,13 +161,6 @@ class IntrinsicSymmetryResult(Result):
         return paths
 
 
-def _dense_map(emb: np.ndarray, signs: np.ndarray) -> np.ndarray:
-    """Nearest neighbour of every row of ``emb`` among the rows of ``emb * signs`` (Sec. 6.2.7)."""
-    use = signs != 0
-    tree = cKDTree(emb[:, use] * signs[use])
-    return tree.query(emb[:, use], k=1)[1].astype(np.int64)
-
-
 def map_consistency(tree: cKDTree, emb: np.ndarray, signs: np.ndarray, rows: np.ndarray, approx: float = 0.0) -> float:
     """How far the point map of ``C = diag(signs)`` is from realising ``C`` itself.
 
@@ -203,11 +196,9 @@ def map_quality(evecs: np.ndarray, area: np.ndarray, vertex_map: np.ndarray) -> 
     orthogonal for an isometry and squares to the identity for an involution; the result is
     ``|C^T C - I|_F + |C C - I|_F``, 0 for an exact intrinsic symmetry. The identity map
     scores 0 too, so callers must rule it out (:func:`intrinsic_symmetry` does: no odd
-    eigenfunction, or more than half the vertices fixed).
+    eigenfunction, or most vertices left in place; it scores maps on a vertex sample).
     """
-    c = pointwise_to_functional(evecs, area, vertex_map)  # (k, k)
-    eye = np.eye(c.shape[0])
-    return float(np.linalg.norm(c.T @ c - eye) + np.linalg.norm(c @ c - eye))
+    return _involution_defect(pointwise_to_functional(evecs, area, vertex_map))
 
 
 _HYPOTHESIS_TEXT = {
