@@ -712,7 +712,7 @@ def intrinsic_symmetry(
         )
 
     tic = time.perf_counter()
-    vmap = cKDTree(chosen.target).query(chosen.query, k=1)[1].astype(np.int64)  # (V',) the thesis's dense map
+    vmap = cKDTree(chosen.target).query(chosen.query, k=1, workers=-1)[1].astype(np.int64)  # (V',) the thesis's dense map
     timings["map"] += time.perf_counter() - tic
     coarse_map = vmap
     full = np.zeros((0, 0))
@@ -721,7 +721,7 @@ def intrinsic_symmetry(
     if refine_iters and chosen.refined is not None:
         tic = time.perf_counter()
         full = chosen.refined  # (k_r, k_r), fitted on the sample
-        vmap = trees[int(ks[-1])].query(big[:, : ks[-1]] @ full, k=1)[1].astype(np.int64)
+        vmap = trees[int(ks[-1])].query(big[:, : ks[-1]] @ full, k=1, workers=-1)[1].astype(np.int64)
         timings["refine"] = time.perf_counter() - tic
     pairs, fmap, rotation, converged = chosen.pairs, chosen.fmap, chosen.rotation, chosen.converged
     hypothesis = chosen.name

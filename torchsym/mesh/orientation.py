@@ -251,4 +251,4 @@ def orientation_reversing_map(
 
 def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
     """The point map of a self functional map: vertex ``i`` goes to the row of ``Phi C^T`` nearest ``Phi[i]``."""
-    return cKDTree(evecs @ fmap.T).query(evecs, k=1)[1].astype(np.int64)
+    return cKDTree(evecs @ fmap.T).query(evecs, k=1, workers=-1)[1].astype(np.int64)
