@@ -165,13 +165,15 @@ def test_rank_choice_rules():
     assert _rank_choice(np.array([[inf, inf, inf], [inf, inf, inf]]), 0.08) == 0
 
 
-def test_has_boundary(blob):
-    from torchsym.mesh.intrinsic import _has_boundary
+def test_edge_face_counts_find_a_boundary(blob):
+    from torchsym.mesh.operators import edge_face_counts
 
     mesh, _ = blob
     faces = mesh.faces.numpy()
-    assert not _has_boundary(faces)  # a closed sphere
-    assert _has_boundary(faces[1:])  # one triangle removed: a hole
+    edges, counts = edge_face_counts(faces)
+    assert edges.shape == (faces.shape[0] * 3 // 2, 2) and (counts == 2).all()  # a closed sphere
+    _, counts = edge_face_counts(faces[1:])  # one triangle removed: a hole of 3 edges
+    assert (counts == 1).sum() == 3
 
 
 def test_selection_without_refinement_and_with_few_samples(blob):

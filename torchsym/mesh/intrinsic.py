@@ -38,6 +38,7 @@ from torchsym.mesh.geodesic import geodesic_distances, thin_points
 from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
 from torchsym.mesh.mesh import Mesh
 from torchsym.mesh.operators import (
+    edge_face_counts,
     edge_graph,
     face_areas,
     laplacian_eigen,
@@ -222,7 +223,7 @@ class _Candidate:
     usable: bool
     notes: list[str]
     refined: np.ndarray | None = None
-    rows_image: np.ndarray | None = None
+    tree: cKDTree | None = None
 
 
 def _fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -313,14 +314,6 @@ class GeodesicProbe:
         """``image``: ``(S,)`` the map's value at each of ``rows``."""
         moved = self.balls[np.arange(self.ball_rows.size), image[self.ball_rows]]  # (b,)
         return float(np.mean(moved < self.radius))
-
-
-def _has_boundary(faces: np.ndarray) -> bool:
-    """Whether some edge of the triangle list belongs to one face only."""
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)  # (3F, 2)
-    keys = edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1]
-    _, counts = np.unique(keys, return_counts=True)
-    return bool((counts == 1).any())
 
 
 def _rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
@@ -672,7 +665,8 @@ def intrinsic_symmetry(
     probe = GeodesicProbe(graph, rows, rng)
     scores, seen = [], []
     for cand in candidates:
-        image = cKDTree(cand.target).query(cand.query[rows], k=1)[1].astype(np.int64)  # (S,)
+        cand.tree = cKDTree(cand.target)
+        image = cand.tree.query(cand.query[rows], k=1)[1].astype(np.int64)  # (S,)
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         if not cand.usable or probe.near_self(image) >= _NEAR_SELF_LIMIT or duplicate:
@@ -684,7 +678,7 @@ def intrinsic_symmetry(
             cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
             scores.append(np.full(3 if refine_k > n_eigen else 2, np.inf))
             continue
-        cand.refined, cand.rows_image = fitted, refined
+        cand.refined = fitted
         phi_k = evecs[rows]
         c_k = _fit_functional(phi_k, evecs[refined], area[rows])
         defects = [_involution_defect(c_k)]
@@ -692,7 +686,7 @@ def intrinsic_symmetry(
             defects.append(_involution_defect(_fit_functional(big[rows], big[refined], area[rows])))
         scores.append(np.array([*defects, probe.distortion(refined)]))
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
-    best = _rank_choice(table, max_distortion_open if _has_boundary(f) else max_distortion)
+    best = _rank_choice(table, max_distortion_open if bool((edge_face_counts(f)[1] == 1).any()) else max_distortion)
     timings["select"] = time.perf_counter() - tic
     chosen = candidates[best]
     for cand, row in zip(candidates, table):
@@ -712,7 +706,7 @@ def intrinsic_symmetry(
         )
 
     tic = time.perf_counter()
-    vmap = cKDTree(chosen.target).query(chosen.query, k=1, workers=-1)[1].astype(np.int64)  # (V',) the thesis's dense map
+    vmap = chosen.tree.query(chosen.query, k=1, workers=-1)[1].astype(np.int64)  # (V',) the thesis's dense map
     timings["map"] += time.perf_counter() - tic
     coarse_map = vmap
     full = np.zeros((0, 0))

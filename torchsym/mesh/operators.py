@@ -20,6 +20,7 @@ from torchsym.errors import InputShapeError, SolverError
 __all__ = [
     "adjacency_matrix",
     "cotangent_laplacian",
+    "edge_face_counts",
     "edge_graph",
     "face_areas",
     "laplacian_eigen",
@@ -116,6 +117,15 @@ def laplacian_eigen(
         raise SolverError(f"laplacian_eigen: ARPACK failed for k={k} on a mesh with {n} vertices ({exc})") from None
     order = np.argsort(evals)
     return evals[order], evecs[:, order]  # (k,), (V, k)
+
+
+def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct edges ``(E, 2)`` (sorted vertex pairs) and how many triangles hold each ``(E,)``.
+
+    Count 1: a boundary edge; 2: an interior edge of a manifold; more: non-manifold.
+    """
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)  # (3F, 2)
+    return np.unique(edges, axis=0, return_counts=True)
 
 
 def adjacency_matrix(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:

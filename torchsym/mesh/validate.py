@@ -19,7 +19,7 @@ from scipy.sparse.csgraph import connected_components
 from torchsym.core.checks import check_finite
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.mesh.mesh import Mesh
-from torchsym.mesh.operators import face_areas
+from torchsym.mesh.operators import edge_face_counts, face_areas
 
 __all__ = ["ValidatedMesh", "validate_mesh"]
 
@@ -105,8 +105,7 @@ def validate_mesh(
             f"zero-area triangles (first: face {idx[0]} = {f[idx[0]].tolist()})"
         )
 
-    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)  # (3F, 2)
-    uniq, counts = np.unique(edges, axis=0, return_counts=True)
+    uniq, counts = edge_face_counts(f)
     if (counts > 2).any():
         bad = uniq[counts > 2]
         raise InputValueError(
