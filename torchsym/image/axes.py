@@ -313,15 +313,10 @@ def mirror_gradients(gray: np.ndarray, sigma: float = 1.5) -> tuple[np.ndarray, 
 
 
 def _bilinear(img: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``img`` at float positions, NaN outside the image."""
-    h, w = img.shape
-    inside = (x >= 0) & (x <= w - 1) & (y >= 0) & (y <= h - 1)
-    x = np.clip(x, 0, w - 1.001)
-    y = np.clip(y, 0, h - 1.001)
-    x0, y0 = x.astype(np.int64), y.astype(np.int64)
-    fx, fy = x - x0, y - y0
-    v = (img[y0, x0] * (1 - fx) + img[y0, x0 + 1] * fx) * (1 - fy) + (img[y0 + 1, x0] * (1 - fx) + img[y0 + 1, x0 + 1] * fx) * fy
-    return np.where(inside, v, np.nan)
+    """``img`` at float positions ``(x, y)`` by bilinear interpolation, NaN outside the image."""
+    from scipy.ndimage import map_coordinates
+
+    return map_coordinates(img, np.stack([y, x]), order=1, mode="constant", cval=np.nan, prefilter=False)
 
 
 @dataclasses.dataclass(frozen=True)
