@@ -9,58 +9,121 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputValueError
+from torchsym.errors import InputShapeError, InputValueError
 from torchsym.image import boundary_clique_axes
-from torchsym.image.axes import axis_evidence, mirror_gradients
+from torchsym.image.axes import axis_evidence, clip_line_to_image, mirror_gradients
 
 
-def _kite(noise: float = 0.02) -> np.ndarray:
-    """120 x 160 grey image: a kite symmetric about x = 60 from y = 20 to y = 140, seeded noise."""
-    img = np.full((160, 120), 0.2, np.float32)
-    poly = np.array([[60, 20], [95, 70], [60, 140], [25, 70]], np.int32)
-    cv2.fillPoly(img, [poly], 0.8)
-    return img + noise * np.random.default_rng(0).standard_normal(img.shape).astype(np.float32)
+def _rotation(angle: float, centre=(100.0, 100.0)) -> np.ndarray:
+    """2 x 3 affine map rotating by ``angle`` degrees about ``centre``."""
+    th = math.radians(angle)
+    r = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
+    return np.concatenate([r, (np.asarray(centre) - r @ np.asarray(centre))[:, None]], 1)
 
 
-def _kite_pairs(y0: float, y1: float) -> np.ndarray:
-    """Mirror pairs on the kite's lower edges between rows ``y0`` and ``y1``: ``x = 60 +- 35 (140 - y) / 70``."""
+def _kite(angle: float = 0.0, noise: float = 0.02, size: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """A kite symmetric about its axis from ``(100, 40)`` (tip) to ``(100, 160)``, turned by ``angle`` deg.
+
+    Returns the grey image (seeded noise) and the 2 x 3 rotation.
+    """
+    m = _rotation(angle)
+    poly = np.array([[100, 40], [135, 90], [100, 160], [65, 90]], np.float64)
+    poly = poly @ m[:, :2].T + m[:, 2]
+    img = np.full((size, size), 0.2, np.float32)
+    cv2.fillPoly(img, [np.round(poly * 16).astype(np.int32)], 0.8, cv2.LINE_AA, shift=4)
+    return img + noise * np.random.default_rng(0).standard_normal(img.shape).astype(np.float32), m
+
+
+def _kite_axis_and_pairs(m: np.ndarray, y0: float = 100.0, y1: float = 130.0):
+    """The kite's axis (unit normal) and 9 mirror pairs on its lower edges between rows y0 and y1 (before turning)."""
     y = np.linspace(y0, y1, 9)
-    half = 35.0 * (140.0 - y) / 70.0
-    return np.stack([60 - half, y, 60 + half, y], 1)
+    half = 35.0 * (160.0 - y) / 70.0
+    left = np.stack([100 - half, y], 1) @ m[:, :2].T + m[:, 2]
+    right = np.stack([100 + half, y], 1) @ m[:, :2].T + m[:, 2]
+    n = m[:, :2] @ np.array([1.0, 0.0])
+    centre = m[:, :2] @ np.array([100.0, 100.0]) + m[:, 2]
+    return np.array([n[0], n[1], -n @ centre]), np.concatenate([left, right], 1)
 
 
-AXIS = np.array([1.0, 0.0, -60.0])  # x = 60; its parameter t is y
+def _t(line: np.ndarray, point) -> float:
+    """Parameter of ``point`` along ``line`` (as in clip_line_to_image)."""
+    a, b, c = line
+    return float((np.asarray(point, dtype=np.float64) - np.array([-c * a, -c * b])) @ np.array([-b, a]))
 
 
 class TestAxisEvidence:
-    def test_true_axis_is_mirrored(self):
-        gx, gy = mirror_gradients(_kite())
-        ev = axis_evidence(gx, gy, AXIS, _kite_pairs(80, 110))
-        assert ev.symmetry > 0.8
+    @pytest.mark.parametrize("angle", [0.0, 35.0, 90.0, 200.0])
+    def test_extent_grows_to_the_object(self, angle):
+        """Pairs on the middle third only; the extent grows to the tip and the bottom, within a bin."""
+        img, m = _kite(angle)
+        line, pairs = _kite_axis_and_pairs(m)
+        ev = axis_evidence(*mirror_gradients(img), line, pairs)
+        tip = m[:, :2] @ np.array([100.0, 40.0]) + m[:, 2]
+        bottom = m[:, :2] @ np.array([100.0, 160.0]) + m[:, 2]
+        ends = sorted((_t(line, tip), _t(line, bottom)))
+        assert ev.extent[0] == pytest.approx(ends[0], abs=5) and ev.extent[1] == pytest.approx(ends[1], abs=5)
+        assert ev.symmetry > 0.9
+        plain = axis_evidence(*mirror_gradients(img), line, pairs, grow_threshold=None)
+        t_pairs = sorted((_t(line, pairs[0, :2]), _t(line, pairs[-1, :2])))
+        assert plain.extent == pytest.approx(tuple(t_pairs), abs=1e-6)
+
+    def test_area_is_the_band(self):
+        """Band of half-width 30.6 (90th percentile half chord) less the 4 px gap, 30 px long, step 2."""
+        img, m = _kite()
+        line, pairs = _kite_axis_and_pairs(m)
+        ev = axis_evidence(*mirror_gradients(img), line, pairs)
+        half = np.percentile(0.5 * np.hypot(*(pairs[:, 2:] - pairs[:, :2]).T), 90)
+        rows = len(np.arange(4.0, half + 1e-9, 2.0)) * 2
+        assert ev.area == pytest.approx(16 * rows * 4.0 / 200**2)  # 16 samples over t in [100, 130]
+
+    def test_wrong_axis_has_less_symmetry(self):
+        img, m = _kite()
+        line, pairs = _kite_axis_and_pairs(m)
+        gx, gy = mirror_gradients(img)
+        true = axis_evidence(gx, gy, line, pairs).symmetry
         th = math.radians(10)
         tilted = np.array([math.cos(th), math.sin(th), 0.0])
-        tilted[2] = -(tilted[:2] @ np.array([60.0, 95.0]))  # through the same centre
-        assert axis_evidence(gx, gy, tilted, _kite_pairs(80, 110)).symmetry < ev.symmetry - 0.4
-        assert 0 < ev.area < 1
+        tilted[2] = -(tilted[:2] @ np.array([100.0, 115.0]))  # through the same centre
+        assert axis_evidence(gx, gy, tilted, pairs).symmetry < true - 0.4
+        shifted = line - np.array([0.0, 0.0, 6.0])  # 6 px to the side
+        assert axis_evidence(gx, gy, shifted, pairs).symmetry < true - 0.3
 
     def test_noise_has_no_evidence(self):
-        gray = np.random.default_rng(1).random((160, 120)).astype(np.float32)
-        gx, gy = mirror_gradients(gray)
-        assert abs(axis_evidence(gx, gy, AXIS, _kite_pairs(80, 110)).symmetry) < 0.15
-
-    def test_extent_grows_to_the_object(self):
-        gx, gy = mirror_gradients(_kite())
-        pairs = _kite_pairs(80, 110)
-        lo, hi = axis_evidence(gx, gy, AXIS, pairs).extent
-        assert lo == pytest.approx(20, abs=8) and hi == pytest.approx(140, abs=8)
-        assert axis_evidence(gx, gy, AXIS, pairs, grow_threshold=None).extent == pytest.approx((80, 110))
+        gray = np.random.default_rng(1).random((200, 200)).astype(np.float32)
+        line, pairs = _kite_axis_and_pairs(_rotation(0.0))
+        ev = axis_evidence(*mirror_gradients(gray), line, pairs)
+        assert abs(ev.symmetry) < 0.15
+        assert ev.extent[1] - ev.extent[0] < 30 + 2 * 8  # at most a couple of bins of chance growth
 
     def test_extent_stops_at_clutter(self):
-        gray = _kite()
-        gray[:40] = np.random.default_rng(2).random((40, 120))  # unsymmetric texture above the kite's tip
-        gx, gy = mirror_gradients(gray)
-        lo, hi = axis_evidence(gx, gy, AXIS, _kite_pairs(80, 110)).extent
-        assert lo > 32 and hi == pytest.approx(140, abs=8)
+        img, m = _kite()
+        img[:70] = np.random.default_rng(2).random((70, 200))  # unsymmetric texture over the tip
+        line, pairs = _kite_axis_and_pairs(m)
+        lo, hi = axis_evidence(*mirror_gradients(img), line, pairs).extent
+        assert 62 <= lo <= 80 and hi == pytest.approx(160, abs=5)
+
+    def test_bad_input(self):
+        gx, gy = mirror_gradients(np.zeros((20, 20), np.float32))
+        line = np.array([1.0, 0.0, -10.0])
+        pair = np.array([[5.0, 10.0, 15.0, 10.0]])
+        with pytest.raises(InputValueError, match="pairs"):
+            axis_evidence(gx, gy, line, np.zeros((0, 4)))
+        with pytest.raises(InputValueError, match="pairs"):
+            axis_evidence(gx, gy, line, np.full((1, 4), np.nan))
+        with pytest.raises(InputShapeError, match="pairs"):
+            axis_evidence(gx, gy, line, np.zeros((3, 2)))
+        with pytest.raises(InputValueError, match="line"):
+            axis_evidence(gx, gy, np.array([0.0, 0.0, 1.0]), pair)
+        with pytest.raises(InputShapeError, match="line"):
+            axis_evidence(gx, gy, np.ones(4), pair)
+        with pytest.raises(InputShapeError, match="gx"):
+            axis_evidence(gx, gy[:5], line, pair)
+        with pytest.raises(InputValueError, match="grow_threshold"):
+            axis_evidence(gx, gy, line, pair, grow_threshold=1.5)
+        blank = axis_evidence(gx, gy, line, pair)
+        assert blank.symmetry == 0.0 and blank.extent == (10.0, 10.0)
+        off = axis_evidence(gx, gy, np.array([1.0, 0.0, 100.0]), pair)  # x = -100: misses the image
+        assert off.area == 0.0 and off.symmetry == 0.0
 
 
 class TestScores:
@@ -70,15 +133,26 @@ class TestScores:
         counts = torch.tensor([float((res.pair_axis == k).sum()) for k in range(len(res))])
         assert torch.equal(res.scores, counts)
 
-    def test_gradient_extent_covers_support(self, single_objects):
-        img, _ = single_objects[1]
-        grown = boundary_clique_axes(img)
+    def test_segments_are_the_grown_extents(self, single_objects):
+        """Each axis is its line clipped to the extent axis_evidence reports, and the score is built from it."""
+        img, _ = single_objects[0]
+        res = boundary_clique_axes(img)
         plain = boundary_clique_axes(img, grow_threshold=None)
-        assert torch.equal(grown.lines, plain.lines)
-        for a, b in zip(grown.axes, plain.axes):
-            assert (a[2:] - a[:2]).norm() >= (b[2:] - b[:2]).norm() - 1e-3
+        assert torch.equal(res.lines, plain.lines) and len(res) >= 2
+        gx, gy = mirror_gradients(img.mean(0).numpy())
+        longer = 0
+        for k in range(len(res)):
+            sup = res.pairs[res.pair_axis == k].double().numpy()
+            ev = axis_evidence(gx, gy, res.lines[k].double().numpy(), sup, min_half_width=8.0)
+            seg = clip_line_to_image(res.lines[k].double(), *ev.extent, 240, 240)
+            assert res.axes[k].tolist() == pytest.approx(seg, abs=1e-3)
+            score = max(ev.symmetry, 0.0) * math.sqrt(ev.area) * math.log1p(sup.shape[0])
+            assert float(res.scores[k]) == pytest.approx(score, rel=1e-4)
+            longer += float((res.axes[k, 2:] - res.axes[k, :2]).norm()) > float((plain.axes[k, 2:] - plain.axes[k, :2]).norm()) + 1
+        assert longer >= 1
 
-    @pytest.mark.parametrize(("kw", "name"), [({"score": "votes"}, "score"), ({"grow_threshold": 2.0}, "grow_threshold")])
+    @pytest.mark.parametrize(("kw", "name"), [({"score": "votes"}, "score"), ({"grow_threshold": 2.0}, "grow_threshold"),
+                                              ({"grow_threshold": True}, "grow_threshold")])
     def test_bad_settings(self, kw, name):
         with pytest.raises(InputValueError, match=name):
             boundary_clique_axes(torch.rand(3, 32, 32), **kw)

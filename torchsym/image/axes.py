@@ -132,9 +132,11 @@ class ReflectionAxesResult(Result):
 
     Attributes:
         axes: ``(K, 4)`` float segments ``x1, y1, x2, y2`` in input-image pixels (origin
-            top-left, x right, y down), best first: the axis line clipped to the extent of
-            its supporting pairs and to the image.
-        scores: ``(K,)`` float, decreasing: the axis's support (number of mirror pairs).
+            top-left, x right, y down), best first: the axis line clipped to the image and
+            to the extent of its supporting pairs (or the extent the method reports,
+            e.g. grown by :func:`axis_evidence`).
+        scores: ``(K,)`` float, decreasing: the method's axis score (its documentation
+            says which; by default the support, the number of mirror pairs).
         lines: ``(K, 3)`` float lines ``(a, b, c)``, ``a x + b y + c = 0`` with unit ``(a, b)``.
         pairs: ``(P, 4)`` float mirror pairs ``x1, y1, x2, y2`` found in the image.
         pair_axis: ``(P,)`` int64 index into ``axes`` of the axis each pair supports, -1
@@ -328,7 +330,8 @@ class AxisEvidence:
             the supporting pairs' extent, in [-1, 1]: 1 when every gradient there equals
             the reflection of the gradient at its mirror point (direction and size), about
             0 for unrelated clutter.
-        area: the band's area as a fraction of the image.
+        area: the part of that band where both ``p`` and ``p'`` lie in the image, as a
+            fraction of the image's area.
         extent: ``(t_lo, t_hi)`` along the line (parameter of :func:`clip_line_to_image`),
             the support's extent grown where the mirror evidence continues.
     """
@@ -338,11 +341,25 @@ class AxisEvidence:
     extent: tuple[float, float]
 
 
+def _grow(t: np.ndarray, gain: np.ndarray, bin_length: float) -> float:
+    """How far to grow past an end: ``t >= 0`` distances beyond it, ``gain`` per sample.
+
+    Bins ``[k L, (k + 1) L)``; the run of bins from the end with the largest positive
+    total gain, or 0 when every run loses.
+    """
+    if t.size == 0:
+        return 0.0
+    nb = int(t.max() // bin_length) + 1
+    total = np.cumsum(np.bincount((t // bin_length).astype(np.int64), weights=gain, minlength=nb))
+    k = int(np.argmax(total))
+    return (k + 1) * bin_length if total[k] > 0 else 0.0
+
+
 def axis_evidence(
     gx: np.ndarray,
     gy: np.ndarray,
-    line: np.ndarray,
-    pairs: np.ndarray,
+    line: Any,
+    pairs: Any,
     *,
     min_half_width: float = 8.0,
     min_offset: float = 4.0,
@@ -360,33 +377,38 @@ def axis_evidence(
     a symmetric image has ``g(p) = R g(p')`` for its gradient ``g``; the ``symmetry`` of
     :class:`AxisEvidence` is ``1 - sum |g(p) - R g(p')|^2 / sum (|g(p)|^2 + |g(p')|^2)``,
     so an edge without an edge at its mirror point counts against the axis as much as a
-    misoriented one.
+    misoriented one (where both points lie in the image; points whose mirror falls
+    outside are left out).
 
     - Band: points with offset between ``min_offset`` and the half-width ``w`` from the
-      line (``w``: the 90th percentile of the supporting pairs' half chords, at least
-      ``min_half_width``), sampled every ``step`` pixels, over the whole line inside the
-      image. Points closer to the line than ``min_offset`` are left out: after smoothing
-      a pixel that near the axis correlates with its mirror whatever the image.
+      line, sampled every ``step`` pixels from the support's first point ``t0``; ``w`` is
+      the 90th percentile of the supporting pairs' half chords, at least
+      ``min_half_width`` and ``min_offset + step``. Points closer to the line than
+      ``min_offset`` are left out: after smoothing a pixel that near the axis correlates
+      with its mirror whatever the image.
     - ``symmetry`` and ``area``: over the band's part within the supporting pairs' extent
       ``[t0, t1]``.
-    - ``extent``: ``[t0, t1]`` grown at each end by the run of bins (``bin_length``
-      pixels) that maximises ``sum 2 g . R g' - grow_threshold (|g|^2 + |g'|^2)``, i.e. as
-      far as the local symmetry stays above ``grow_threshold`` on balance. Only points
-      whose gradient (or their mirror's) is at least ``edge_fraction`` of the mean within
-      ``[t0, t1]`` count: smooth shading along the axis is mirror symmetric too (a ramp
-      along the axis is its own mirror image) but is no part of the object. Boundary
-      pairs need a chord of at least ``segment_length`` pixels, so the supporting pairs
-      stop short of an object's narrow ends (a leaf's tip, an animal's chin) while the
-      gradients there are still mirrored. ``None`` keeps ``[t0, t1]``.
+    - ``extent``: ``[t0, t1]`` grown past each end by the run of bins (``bin_length``
+      pixels, counted from that end) that maximises
+      ``sum 2 g . R g' - grow_threshold (|g|^2 + |g'|^2)``, i.e. as far as the local
+      symmetry stays above ``grow_threshold`` on balance. Only points whose gradient (or
+      their mirror's) is at least ``edge_fraction`` of the mean within ``[t0, t1]`` count:
+      smooth shading along the axis is mirror symmetric too (a ramp along the axis is its
+      own mirror image) but is no part of the object. Boundary pairs are at least a
+      minimum chord apart (``segment_length`` in
+      :func:`~torchsym.image.boundary_cliques.boundary_clique_axes`), so the supporting
+      pairs stop short of an object's narrow ends (a leaf's tip, an animal's chin) while
+      the gradients there are still mirrored. ``None`` keeps ``[t0, t1]``.
 
     Args:
         gx: ``(H, W)`` x-derivative (:func:`mirror_gradients`).
-        gy: ``(H, W)`` y-derivative.
-        line: ``(3,)`` ``a x + b y + c = 0`` with unit ``(a, b)``.
-        pairs: ``(M, 4)`` supporting mirror pairs ``x1, y1, x2, y2``, ``M >= 1``.
+        gy: ``(H, W)`` y-derivative, the same shape.
+        line: ``(3,)`` ``a x + b y + c = 0``; ``(a, b)`` is normalised here.
+        pairs: ``(M, 4)`` supporting mirror pairs ``x1, y1, x2, y2``, ``M >= 1``, finite.
         min_half_width: the least band half-width, pixels.
         min_offset: the band leaves out points nearer the line than this, pixels.
-        grow_threshold: local symmetry above which the extent grows; None: no growth.
+        grow_threshold: local symmetry in [-1, 1] above which the extent grows; None: no
+            growth.
         edge_fraction: gradients weaker than this fraction of the support's mean gradient
             do not count for the growth.
         step: sampling step of the band, pixels.
@@ -394,28 +416,57 @@ def axis_evidence(
 
     Returns:
         :class:`AxisEvidence`.
+
+    Raises:
+        InputShapeError: ``gx``, ``gy``, ``line`` or ``pairs`` of the wrong shape.
+        InputValueError: non-finite ``line`` or ``pairs``, a zero normal, no pairs, or a
+            setting out of range.
     """
+    from torchsym.core.checks import check_in_range, check_positive
+    from torchsym.errors import InputShapeError, InputValueError
+
+    gx, gy = np.asarray(gx), np.asarray(gy)
+    if gx.ndim != 2 or gy.shape != gx.shape:
+        raise InputShapeError(f"gx, gy: expected two (H, W) arrays of one shape, got {gx.shape} and {gy.shape}")
+    ln = np.asarray(line, dtype=np.float64).reshape(-1)
+    if ln.shape != (3,):
+        raise InputShapeError(f"line: expected (3,) a, b, c, got shape {np.asarray(line).shape}")
+    norm = float(np.hypot(ln[0], ln[1])) if np.isfinite(ln).all() else float("nan")
+    if not norm > 0:
+        raise InputValueError(f"line: expected finite (a, b, c) with (a, b) != 0, got {ln.tolist()}")
+    pairs = np.asarray(pairs, dtype=np.float64)
+    if pairs.ndim != 2 or pairs.shape[1] != 4:
+        raise InputShapeError(f"pairs: expected (M, 4) x1, y1, x2, y2, got shape {pairs.shape}")
+    if pairs.shape[0] == 0 or not np.isfinite(pairs).all():
+        raise InputValueError(f"pairs: expected at least one finite pair, got {pairs.shape[0]} (finite: {np.isfinite(pairs).all()})")
+    for name, val in (("min_half_width", min_half_width), ("min_offset", min_offset), ("edge_fraction", edge_fraction)):
+        check_positive(val, name, allow_zero=True)
+    step, bin_length = check_positive(step, "step"), check_positive(bin_length, "bin_length")
+    if grow_threshold is not None:
+        grow_threshold = check_in_range(grow_threshold, "grow_threshold", -1.0, 1.0)
     h, w = gx.shape
-    a, b, c = (float(v) for v in line)
+    a, b, c = ln / norm
     n = np.array([a, b])
     d = np.array([-b, a])
     foot = np.array([-c * a, -c * b])
-    pairs = np.asarray(pairs, dtype=np.float64).reshape(-1, 4)
     t_sup = (pairs.reshape(-1, 2) - foot) @ d
     t0, t1 = float(t_sup.min()), float(t_sup.max())
     half = 0.5 * np.hypot(pairs[:, 2] - pairs[:, 0], pairs[:, 3] - pairs[:, 1])
     width = max(float(np.percentile(half, 90)), float(min_half_width), min_offset + step)
-    full = clip_line_to_image(line, -1e9, 1e9, w, h)
-    area_frac = (t1 - t0) * 2 * (width - min_offset) / (h * w)
+    full = clip_line_to_image(np.array([a, b, c]), -1e9, 1e9, w, h)
     if full is None:
-        return AxisEvidence(0.0, area_frac, (t0, t1))
+        return AxisEvidence(0.0, 0.0, (t0, t1))
     f0, f1 = sorted(((np.array(full[:2]) - foot) @ d, (np.array(full[2:]) - foot) @ d))
-    lo_all, hi_all = min(f0, t0), max(f1, t1)
-    ts = np.arange(lo_all, hi_all + 1e-9, step)
+    t_in = t0 + step * np.arange(int((t1 - t0) // step) + 1)
+    t_up = t1 + step * (0.5 + np.arange(max(math.ceil((f1 - t1) / step), 0)))
+    t_down = t0 - step * (0.5 + np.arange(max(math.ceil((t0 - f0) / step), 0)))
+    ts = np.concatenate([t_in, t_up, t_down])
+    part = np.concatenate([np.zeros(t_in.size), np.ones(t_up.size), np.full(t_down.size, 2)]).astype(np.int8)
     ss = np.arange(min_offset, width + 1e-9, step)
     ss = np.concatenate([-ss[::-1], ss])
     p = (foot + ts[:, None, None] * d + ss[None, :, None] * n).reshape(-1, 2)  # (T * S, 2)
     tt = np.repeat(ts, ss.size)
+    part = np.repeat(part, ss.size)
     gpx, gpy = _bilinear(gx, p[:, 0], p[:, 1]), _bilinear(gy, p[:, 0], p[:, 1])
     q = p - 2 * (p @ n + c)[:, None] * n  # mirror points
     qx, qy = _bilinear(gx, q[:, 0], q[:, 1]), _bilinear(gy, q[:, 0], q[:, 1])
@@ -426,21 +477,15 @@ def axis_evidence(
     dot2 = 2 * (gpx * rx + gpy * ry)
     g2, r2 = gpx * gpx + gpy * gpy, rx * rx + ry * ry
     energy = g2 + r2
-    inside = ok & (tt >= t0) & (tt <= t1)
+    inside = ok & (part == 0)
+    area = float(inside.sum()) * step * step / (h * w)
     symmetry = float(dot2[inside].sum() / max(float(energy[inside].sum()), 1e-12))
     lo, hi = t0, t1
     if grow_threshold is not None and inside.any():
         ref = float(np.sqrt(g2[inside]).mean())
         strong = np.maximum(g2, r2) > (edge_fraction * ref) ** 2
-        nb = max(math.ceil((hi_all - lo_all) / bin_length), 1)
-        idx = np.clip(((tt - lo_all) / bin_length).astype(np.int64), 0, nb - 1)
-        gain = np.bincount(idx, weights=np.where(strong, dot2 - grow_threshold * energy, 0.0), minlength=nb)
-        j0 = int(np.clip((t0 - lo_all) // bin_length, 0, nb - 1))
-        j1 = int(np.clip((t1 - lo_all) // bin_length, 0, nb - 1))
-        up = np.cumsum(gain[j1 + 1 :])
-        if up.size and up.max() > 0:
-            hi = max(hi, lo_all + (j1 + 2 + int(np.argmax(up))) * bin_length)
-        down = np.cumsum(gain[:j0][::-1])
-        if down.size and down.max() > 0:
-            lo = min(lo, lo_all + (j0 - 1 - int(np.argmax(down))) * bin_length)
-    return AxisEvidence(symmetry, float(area_frac), (float(lo), float(hi)))
+        gain = np.where(strong, dot2 - grow_threshold * energy, 0.0)
+        up, down = part == 1, part == 2
+        hi = t1 + _grow(tt[up] - t1, gain[up], bin_length)
+        lo = t0 - _grow(t0 - tt[down], gain[down], bin_length)
+    return AxisEvidence(symmetry, area, (float(lo), float(hi)))
