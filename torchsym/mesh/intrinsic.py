@@ -243,14 +243,26 @@ def _involution_defect(fmap: np.ndarray) -> float:
     return float(np.linalg.norm(fmap.T @ fmap - eye) + np.linalg.norm(fmap @ fmap - eye))
 
 
+def nearest_involution(fmap: np.ndarray) -> np.ndarray:
+    """The symmetric orthogonal matrix nearest ``fmap``'s symmetric part: ``Q sign(L) Q^T``.
+
+    ``(C + C^T) / 2 = Q L Q^T``; the result ``S`` has ``S^T S = S S = I``, the functional
+    map of an isometric involution in an orthonormal basis.
+    """
+    lam, q = np.linalg.eigh(0.5 * (fmap + fmap.T))
+    return (q * np.where(lam >= 0, 1.0, -1.0)) @ q.T
+
+
 def _sampled_zoomout(
-    big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: dict
+    big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: dict,
+    involution: bool = True,
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """ZoomOut (Melzi et al. 2019) on the vertex sample ``rows``: returns the sample's image and the last ``C``.
 
     Each round fits ``C`` in the first ``kk`` eigenfunctions from the sample's current
-    images (:func:`_fit_functional`) and maps each sampled vertex to the nearest row of
-    ``Phi`` to its row of ``Phi C``. With 1,000 samples this matched full ZoomOut to
+    images (:func:`_fit_functional`), with ``involution`` replaces it by the nearest
+    isometric involution (:func:`nearest_involution`), and maps each sampled vertex to
+    the nearest row of ``Phi`` to its row of ``Phi C``. With 1,000 samples this matched full ZoomOut to
     0.1 point of correspondence rate on FAUST, TOSCA and the synthetic meshes, at a
     fraction of the nearest-neighbour queries.
     """
@@ -258,6 +270,8 @@ def _sampled_zoomout(
     for kk in ks:
         phi = big[:, :kk]  # (V, kk)
         fitted = _fit_functional(phi[rows], phi[image], area[rows])  # (kk, kk)
+        if involution:
+            fitted = nearest_involution(fitted)
         image = trees[int(kk)].query(phi[rows] @ fitted, k=1)[1].astype(np.int64)
     return image, fitted
 
@@ -401,6 +415,7 @@ def intrinsic_symmetry(
     max_iter: int = 50,
     refine_iters: int = 4,
     refine_k: int = 25,
+    refine_involution: bool = True,
     components: Literal["largest", "refuse"] = "largest",
     generator: torch.Generator | None = None,
 ) -> IntrinsicSymmetryResult:
@@ -443,7 +458,8 @@ def intrinsic_symmetry(
        of themselves (partly the identity, before or after refinement) never win.
     10. ``refine_iters`` rounds of ZoomOut (Melzi et al. 2019, an extension): the
         functional map of the current point map in a basis growing from ``k`` to
-        ``refine_k`` eigenfunctions, and the point map it implies. The rounds run on the
+        ``refine_k`` eigenfunctions, made an orthogonal involution
+        (``refine_involution``), and the point map it implies. The rounds run on the
         selection's vertex sample and the last one maps every vertex.
 
     Args:
@@ -518,6 +534,14 @@ def intrinsic_symmetry(
         refine_k: eigenfunctions of the last ZoomOut round (at least ``n_eigen``; also the
             number of eigenpairs computed in step 2, so it changes the solver's basis
             within repeated eigenvalues too).
+        refine_involution: in each ZoomOut round, replace the fitted ``C`` by the nearest
+            symmetric orthogonal matrix (:func:`nearest_involution`) before mapping: the
+            functional map of an intrinsic reflection is an orthogonal involution, and
+            plain ZoomOut, made for maps between two shapes, does not know it. Raised the
+            correspondence rate from 94.9 % to 95.3 % on FAUST, 92.1 % to 92.3 % on TOSCA
+            and 91.2 % to 91.4 % on the synthetic meshes (every 2nd shape,
+            ``benchmarks/bench_mesh.py``); with holes 34.5 % to 44.5 % (synthetic),
+            54.3 % to 52.5 % (FAUST, 13 shapes) and 40.8 % to 39.0 % (TOSCA, 10 shapes).
         mu: weight of the pairing term of Eq. 6.4. The eigenvalue terms use the
             eigenvalues of the unit-area mesh divided by ``lambda_k``, so that the cost
             does not depend on scale; in these units 0.01 worked best on a development
@@ -541,6 +565,8 @@ def intrinsic_symmetry(
     max_pairs = check_int(max_pairs, "max_pairs", minimum=1)
     max_iter = check_int(max_iter, "max_iter", minimum=1)
     refine_iters = check_int(refine_iters, "refine_iters", minimum=0)
+    if not isinstance(refine_involution, bool):
+        raise InputValueError(f"refine_involution: expected True or False, got {refine_involution!r}")
     refine_k = max(check_int(refine_k, "refine_k", minimum=1), n_eigen) if refine_iters else n_eigen
     sign_hypotheses = check_int(sign_hypotheses, "sign_hypotheses", minimum=0)
     select_samples = check_int(select_samples, "select_samples", minimum=50)
@@ -672,7 +698,7 @@ def intrinsic_symmetry(
         if not cand.usable or probe.near_self(image) >= _NEAR_SELF_LIMIT or duplicate:
             scores.append(np.full(3 if refine_k > n_eigen else 2, np.inf))
             continue
-        refined, fitted = _sampled_zoomout(big, area, rows, image, ks, trees)
+        refined, fitted = _sampled_zoomout(big, area, rows, image, ks, trees, refine_involution)
         if probe.near_self(refined) >= _NEAR_SELF_LIMIT:
             # ZoomOut drifted to the identity, which every test scores as perfect
             cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
@@ -782,6 +808,7 @@ class IntrinsicSymmetry(nn.Module):
         max_iter: int = 50,
         refine_iters: int = 4,
         refine_k: int = 25,
+        refine_involution: bool = True,
         components: str = "largest",
         seed: int = 0,
     ) -> None:
@@ -799,11 +826,12 @@ class IntrinsicSymmetry(nn.Module):
             ("correct", correct),
             ("pairing_hypotheses", pairing_hypotheses),
             ("orientation_hypothesis", orientation_hypothesis),
+            ("refine_involution", refine_involution),
         ):
             if not isinstance(flag, bool):
                 raise InputValueError(f"{name}: expected True or False, got {flag!r}")
         self.cross_pairs, self.correct, self.pairing_hypotheses = cross_pairs, correct, pairing_hypotheses
-        self.orientation_hypothesis = orientation_hypothesis
+        self.orientation_hypothesis, self.refine_involution = orientation_hypothesis, refine_involution
         self.select_samples = check_int(select_samples, "select_samples", minimum=50)
         self.max_distortion = check_positive(max_distortion, "max_distortion")
         self.max_distortion_open = check_positive(max_distortion_open, "max_distortion_open")
@@ -843,6 +871,7 @@ class IntrinsicSymmetry(nn.Module):
             max_iter=self.max_iter,
             refine_iters=self.refine_iters,
             refine_k=self.refine_k,
+            refine_involution=self.refine_involution,
             components=self.components,  # type: ignore[arg-type]
             generator=gen,
         )
