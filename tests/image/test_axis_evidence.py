@@ -151,6 +151,16 @@ class TestScores:
             longer += float((res.axes[k, 2:] - res.axes[k, :2]).norm()) > float((plain.axes[k, 2:] - plain.axes[k, :2]).norm()) + 1
         assert longer >= 1
 
+    def test_axes_without_evidence_are_dropped(self, single_objects):
+        img, _ = single_objects[0]
+        res = boundary_clique_axes(img)
+        every = boundary_clique_axes(img, score="support")
+        assert bool((res.scores > 0).all())
+        assert len(res) + res.info["axes_without_evidence"] == len(every)
+        assert res.info["axes_without_evidence"] >= 1  # this image has a clique on clutter
+        kept = {tuple(v) for v in res.lines.tolist()}
+        assert kept < {tuple(v) for v in every.lines.tolist()}
+
     @pytest.mark.parametrize(("kw", "name"), [({"score": "votes"}, "score"), ({"grow_threshold": 2.0}, "grow_threshold"),
                                               ({"grow_threshold": True}, "grow_threshold")])
     def test_bad_settings(self, kw, name):

@@ -101,9 +101,7 @@ class TestIntrinsicSymmetry:
         thesis = intrinsic_symmetry(mesh, refine_iters=0, sign_hypotheses=0, pairing_hypotheses=False)
         assert "refine" not in thesis.timings and (thesis.map.numpy() == gt).mean() > 0.99
 
-    def test_refined_map_is_an_involution(self, solved, blob):
-        from torchsym.mesh.intrinsic import nearest_involution
-
+    def test_refined_map_is_an_involution(self, solved):
         result, mesh, _ = solved
         c = result.refined_functional_map.numpy().astype(np.float64)
         eye = np.eye(c.shape[0])
