@@ -125,7 +125,12 @@ def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Count 1: a boundary edge; 2: an interior edge of a manifold; more: non-manifold.
     """
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)  # (3F, 2)
-    return np.unique(edges, axis=0, return_counts=True)
+    if edges.size == 0:
+        return edges.reshape(0, 2), np.zeros(0, dtype=np.int64)
+    # one int64 key per edge: the same (lexicographic) order as np.unique(axis=0), ~10x faster
+    key = edges[:, 0].astype(np.int64) * (int(edges.max()) + 1) + edges[:, 1]
+    _, first, counts = np.unique(key, return_index=True, return_counts=True)
+    return edges[first], counts
 
 
 def adjacency_matrix(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:
