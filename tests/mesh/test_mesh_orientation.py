@@ -176,6 +176,25 @@ def test_edge_face_counts_find_a_boundary(blob):
     assert (counts == 1).sum() == 3
 
 
+@pytest.mark.parametrize("dtype", [np.int64, np.int32])
+def test_edge_face_counts_match_numpy_unique(dtype):
+    from torchsym.mesh.operators import edge_face_counts
+
+    rng = np.random.default_rng(0)
+    for n in (0, 1, 7, 500):
+        faces = rng.integers(0, 40, size=(n, 3)).astype(dtype)
+        edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+        want_edges, want_counts = np.unique(edges.reshape(-1, 2), axis=0, return_counts=True)
+        got_edges, got_counts = edge_face_counts(faces)
+        assert np.array_equal(got_edges, want_edges.reshape(-1, 2)) and np.array_equal(got_counts, want_counts)
+    # indices a key would overflow or collide on: the slow exact path
+    big = np.array([[0, 2**32, 5], [5, 0, 2**32]], dtype=np.int64)
+    edges, counts = edge_face_counts(big)
+    assert edges.shape == (3, 2) and counts.tolist() == [2, 2, 2]
+    neg = np.array([[-3, 3, 0], [-2, -1, 0]], dtype=np.int64)
+    assert edge_face_counts(neg)[1].tolist() == [1, 1, 1, 1, 1, 1]
+
+
 def test_selection_without_refinement_and_with_few_samples(blob):
     mesh, gt = blob
     out = intrinsic_symmetry(mesh, refine_iters=0)

@@ -127,8 +127,11 @@ def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)  # (3F, 2)
     if edges.size == 0:
         return edges.reshape(0, 2), np.zeros(0, dtype=np.int64)
+    top = int(edges.max())
+    if int(edges.min()) < 0 or top >= 3_000_000_000:  # a key would collide or overflow int64
+        return np.unique(edges, axis=0, return_counts=True)
     # one int64 key per edge: the same (lexicographic) order as np.unique(axis=0), ~10x faster
-    key = edges[:, 0].astype(np.int64) * (int(edges.max()) + 1) + edges[:, 1]
+    key = edges[:, 0].astype(np.int64) * (top + 1) + edges[:, 1].astype(np.int64)
     _, first, counts = np.unique(key, return_index=True, return_counts=True)
     return edges[first], counts
 
