@@ -63,6 +63,7 @@ class TestAxisEvidence:
         ends = sorted((_t(line, tip), _t(line, bottom)))
         assert ev.extent[0] == pytest.approx(ends[0], abs=5) and ev.extent[1] == pytest.approx(ends[1], abs=5)
         assert ev.symmetry > 0.9
+        assert ev.to_dict()["extent"] == pytest.approx(list(ev.extent))  # JSON-ready like every result
         plain = axis_evidence(*mirror_gradients(img), line, pairs, grow_threshold=None)
         t_pairs = sorted((_t(line, pairs[0, :2]), _t(line, pairs[-1, :2])))
         assert plain.extent == pytest.approx(tuple(t_pairs), abs=1e-6)

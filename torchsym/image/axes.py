@@ -322,7 +322,7 @@ def _bilinear(img: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
-class AxisEvidence:
+class AxisEvidence(Result):
     """Dense mirror-gradient evidence for one axis (:func:`axis_evidence`).
 
     Attributes:
