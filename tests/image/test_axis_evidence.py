@@ -137,8 +137,8 @@ class TestScores:
     def test_segments_are_the_grown_extents(self, single_objects):
         """Each axis is its line clipped to the extent axis_evidence reports, and the score is built from it."""
         img, _ = single_objects[0]
-        res = boundary_clique_axes(img)
-        plain = boundary_clique_axes(img, grow_threshold=None)
+        res = boundary_clique_axes(img, sift_candidates=False)
+        plain = boundary_clique_axes(img, grow_threshold=None, sift_candidates=False)
         assert torch.equal(res.lines, plain.lines) and len(res) >= 2
         gx, gy = mirror_gradients(img.mean(0).numpy())
         longer = 0
@@ -154,7 +154,7 @@ class TestScores:
 
     def test_axes_without_evidence_are_dropped(self, single_objects):
         img, _ = single_objects[0]
-        res = boundary_clique_axes(img)
+        res = boundary_clique_axes(img, sift_candidates=False)
         every = boundary_clique_axes(img, score="support")
         assert bool((res.scores > 0).all())
         assert len(res) + res.info["axes_without_evidence"] == len(every)

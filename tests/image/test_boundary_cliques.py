@@ -63,7 +63,9 @@ class TestBoundaryCliqueAxes:
 
         img, _ = mirrored_objects_image(1)
         res = boundary_clique_axes(img)
-        assert set(res.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques"}
+        assert set(res.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques", "sift"}
+        plain = boundary_clique_axes(img, sift_candidates=False)
+        assert set(plain.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques"}
         assert sum(res.info["stage_seconds"].values()) <= res.info["seconds"] + 1e-6
         again = boundary_clique_axes(img, clique_solver="highs")
         assert again.axes.shape[0] >= 1

@@ -1,0 +1,179 @@
+"""Candidate axes from mirror pairs, their runs along a line, duplicate suppression, and the
+mirrored-SIFT candidates of method (b) (torchsym.image.axes, torchsym.image.ksymmetry)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.image import boundary_clique_axes, ksymmetry_axes
+from torchsym.image.axes import (
+    axis_evidence,
+    mirror_gradients,
+    support_runs,
+    suppress_duplicates,
+)
+from torchsym.image.ksymmetry import mirror_pair_candidates
+from torchsym.image.synthetic import mirrored_objects_image
+from torchsym.metrics.axes import match_axes
+
+
+def _pairs_about(line: np.ndarray, ts, half: float = 20.0, around=(0.0, 0.0)) -> np.ndarray:
+    """Exact mirror pairs about ``line`` with half chord ``half``, midpoints at ``ts`` along the
+    line from the foot of ``around`` on it (the origin's foot by default)."""
+    a, b, c = line
+    n, d = np.array([a, b]), np.array([-b, a])
+    foot = np.asarray(around, dtype=np.float64) - (n @ np.asarray(around, dtype=np.float64) + c) * n
+    mid = foot + np.asarray(ts, dtype=np.float64)[:, None] * d
+    return np.concatenate([mid - half * n, mid + half * n], 1)
+
+
+def _line(angle_deg: float, through) -> np.ndarray:
+    """Line whose normal is at ``angle_deg``, through the point ``through``."""
+    n = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))])
+    return np.array([n[0], n[1], -n @ np.asarray(through, dtype=np.float64)])
+
+
+def _angle(l1: np.ndarray, l2: np.ndarray) -> float:
+    return math.degrees(math.acos(min(1.0, abs(float(l1[:2] @ l2[:2])))))
+
+
+class TestSupportRuns:
+    def test_split_at_gaps_in_order(self):
+        line = _line(30.0, (100, 100))
+        pairs = _pairs_about(line, [40, 0, 10, 100, 5, 108])  # runs {0, 5, 10}, {40}, {100, 108}
+        runs = support_runs(line, pairs, np.arange(6), gap=20.0)
+        assert [r.tolist() for r in runs] == [[1, 4, 2], [0], [3, 5]]
+        assert support_runs(line, pairs, np.arange(6), gap=100.0)[0].size == 6
+        assert support_runs(line, pairs, np.array([3, 0]), gap=20.0)[0].tolist() == [0]
+        assert support_runs(line, pairs, np.zeros(0, np.int64), gap=20.0) == []
+
+
+class TestSuppressDuplicates:
+    def test_same_object_kept_once(self):
+        base = _line(0.0, (100, 100))
+        near = _line(4.0, (100, 103))  # 4 deg and 3 px off, same stretch of the line
+        assert suppress_duplicates([base, near], [(-50.0, 50.0), (-45.0, 55.0)], [1.0, 2.0]) == [1]
+        assert suppress_duplicates([base, near], [(-50.0, 50.0), (-45.0, 55.0)], [3.0, 2.0]) == [0]
+
+    def test_distinct_axes_kept(self):
+        base = _line(0.0, (100, 100))
+        cases = [
+            (_line(20.0, (100, 100)), (-50.0, 50.0)),  # turned beyond 10 deg
+            (_line(0.0, (130, 100)), (-50.0, 50.0)),  # parallel, 30 px away
+            (base.copy(), (80.0, 160.0)),  # same line, another object further along it
+        ]
+        for other, extent in cases:
+            assert suppress_duplicates([base, other], [(-50.0, 50.0), extent], [2.0, 1.0]) == [0, 1]
+
+
+class TestMirrorPairCandidates:
+    def test_two_axes_among_clutter(self):
+        """A big and a small set of exact pairs among random pairs: both axes come out, big first."""
+        rng = np.random.default_rng(0)
+        big, small = _line(25.0, (150, 120)), _line(100.0, (400, 300))
+        pairs = np.concatenate([
+            _pairs_about(big, np.linspace(-60, 60, 12), half=30.0, around=(150, 120)),
+            _pairs_about(small, np.linspace(-15, 15, 5), half=12.0, around=(400, 300)) + rng.normal(0, 0.3, (5, 4)),
+            rng.uniform(0, 480, (150, 4)),
+        ])
+        cands = mirror_pair_candidates(pairs, 480, 640)
+        assert len(cands) >= 2
+        line0, members0 = cands[0]
+        assert _angle(line0, big) < 0.01 and abs(line0[2] * np.sign(line0[:2] @ big[:2]) - big[2]) < 0.01
+        assert set(range(12)) <= set(members0.tolist())
+        found = [(ln, m) for ln, m in cands if _angle(ln, small) < 3.0 and abs(np.array([400, 300, 1.0]) @ ln) < 3.0]
+        assert found and set(found[0][1].tolist()) >= set(range(12, 17))
+        assert cands[0][1].size >= max(m.size for _, m in cands)
+
+    def test_two_objects_on_one_line_are_two_candidates(self):
+        line = _line(60.0, (300, 200))
+        pairs = np.concatenate([_pairs_about(line, np.linspace(-200, -150, 6)), _pairs_about(line, np.linspace(100, 150, 6))])
+        cands = mirror_pair_candidates(pairs, 480, 640)
+        assert sorted(sorted(m.tolist()) for _, m in cands) == [list(range(6)), list(range(6, 12))]
+        whole = mirror_pair_candidates(pairs, 480, 640, gap=None)
+        assert len(whole) == 1 and whole[0][1].size == 12
+
+    def test_min_support_and_empty(self):
+        line = _line(0.0, (100, 100))
+        assert mirror_pair_candidates(_pairs_about(line, [0, 5, 10]), 200, 200) == []
+        assert len(mirror_pair_candidates(_pairs_about(line, [0, 5, 10]), 200, 200, min_support=3)) == 1
+        assert mirror_pair_candidates(np.zeros((0, 4)), 200, 200) == []
+
+    @pytest.mark.parametrize(("kw", "name", "err"), [
+        ({"pairs": np.zeros((5, 3))}, "pairs", InputShapeError),
+        ({"pairs": np.full((5, 4), np.nan)}, "pairs", InputValueError),
+        ({"angle_tol": 0.0}, "angle_tol", InputValueError),
+        ({"distance_tol": -1.0}, "distance_tol", InputValueError),
+        ({"min_support": 0}, "min_support", InputValueError),
+        ({"max_candidates": 1.5}, "max_candidates", InputValueError),
+        ({"gap": 0.0}, "gap", InputValueError),
+    ])
+    def test_bad_input(self, kw, name, err):
+        args = {"pairs": np.zeros((5, 4)), **kw}
+        with pytest.raises(err, match=name):
+            mirror_pair_candidates(args.pop("pairs"), 100, 100, **args)
+
+
+class TestGrowthGap:
+    def test_growth_does_not_cross_empty_background(self):
+        """A mirrored blob 60 px beyond the object's end, empty between: not joined with max_gap."""
+        img = np.zeros((220, 200), np.float32)
+        img[40:100, 70:130] = 1.0  # symmetric about x = 99.5
+        img[160:170, 90:110] = 1.0  # a stray mirrored blob further down the axis
+        line = np.array([1.0, 0.0, -99.5])
+        pairs = np.array([[72.0, y, 127.0, y] for y in np.linspace(50, 90, 9)])
+        gx, gy = mirror_gradients(img)
+        gapped = axis_evidence(gx, gy, line, pairs)
+        open_ended = axis_evidence(gx, gy, line, pairs, max_gap=None)
+        # along x = 99.5 the parameter of clip_line_to_image is y (foot (99.5, 0), direction (0, 1))
+        assert gapped.extent[0] == pytest.approx(40, abs=8) and gapped.extent[1] == pytest.approx(100, abs=8)  # a bin + smoothing
+        assert open_ended.extent[1] > 160  # without the rule the segment reaches the blob
+        with pytest.raises(InputValueError, match="max_gap"):
+            axis_evidence(gx, gy, line, pairs, max_gap=-1)
+
+
+class TestSiftCandidates:
+    def test_small_objects_found(self):
+        """The synthetic image whose two small objects have no boundary pairs: SIFT pairs find them."""
+        img, gt = mirrored_objects_image(3, generator=torch.Generator().manual_seed(1003))
+        res = boundary_clique_axes(img)
+        plain = boundary_clique_axes(img, sift_candidates=False)
+        hit = match_axes(res.axes, gt, image_size=(360, 480), scores=res.scores, criterion="challenge")
+        hit_plain = match_axes(plain.axes, gt, image_size=(360, 480), scores=plain.scores, criterion="challenge")
+        assert int(hit.sum()) == 3 and int(hit_plain.sum()) < 3
+        assert res.info["n_sift_pairs"] > 0 and res.info["sift_axes"] >= 1
+        assert res.pairs.shape[0] == res.info["n_pairs_found"] + res.info["n_sift_pairs"]
+        assert bool((res.scores[1:] <= res.scores[:-1]).all())
+
+    def test_settings(self):
+        img = torch.rand(3, 48, 48)
+        with pytest.raises(InputValueError, match="sift_candidates"):
+            boundary_clique_axes(img, score="support", sift_candidates=True)
+        with pytest.raises(InputValueError, match="sift_candidates"):
+            boundary_clique_axes(img, sift_candidates="yes")
+        with pytest.raises(InputValueError, match="sift_weight"):
+            boundary_clique_axes(img, sift_weight=0.0)
+        assert "sift" not in boundary_clique_axes(img, score="support").info["stage_seconds"]
+
+
+class TestKSymmetryGradientScore:
+    def test_segments_on_the_objects(self):
+        """Clustered axes spread along their lines; the gradient score's segments sit on the objects."""
+        img, gt = mirrored_objects_image(3, generator=torch.Generator().manual_seed(1009))
+        res = ksymmetry_axes(img, score="gradient", max_axes=8)
+        thesis = ksymmetry_axes(img, max_axes=8)
+        hit = match_axes(res.axes, gt, image_size=(360, 480), scores=res.scores, criterion="challenge")
+        hit_thesis = match_axes(thesis.axes, gt, image_size=(360, 480), scores=thesis.scores, criterion="challenge")
+        assert int(hit.sum()) > int(hit_thesis.sum())
+        assert "axes_without_evidence" in res.info and "axes_without_evidence" not in thesis.info
+
+    def test_bad_score(self):
+        with pytest.raises(InputValueError, match="score"):
+            ksymmetry_axes(torch.rand(1, 32, 32), score="votes")
+        with pytest.raises(InputValueError, match="grow_threshold"):
+            ksymmetry_axes(torch.rand(1, 32, 32), score="gradient", grow_threshold=3.0)
