@@ -16,7 +16,7 @@ Writes ``benchmarks/results/axes.md``, ``axes.json`` and ``axes_grid.png`` (dete
 on the first dev images, one row per method). Settings are the solvers' defaults; nothing
 is tuned per image.
 
-    python benchmarks/bench_axes.py [--data DIR] [--synthetic 10] [--limit N]
+    python benchmarks/bench_axes.py [--data DIR] [--synthetic 30] [--limit N]
 """
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ def load_dev(folder: Path, limit: int | None):
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=HERE.parent.parent / "shared/data/images/reflection_single_dev")
-    parser.add_argument("--synthetic", type=int, default=10, help="synthetic images (2-3 objects each)")
+    parser.add_argument("--synthetic", type=int, default=30, help="synthetic images (2-3 objects each)")
     parser.add_argument("--limit", type=int, default=None, help="only the first N dev images")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     parser.add_argument("--threads", type=int, default=2)

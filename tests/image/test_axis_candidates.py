@@ -177,3 +177,82 @@ class TestKSymmetryGradientScore:
             ksymmetry_axes(torch.rand(1, 32, 32), score="votes")
         with pytest.raises(InputValueError, match="grow_threshold"):
             ksymmetry_axes(torch.rand(1, 32, 32), score="gradient", grow_threshold=3.0)
+
+
+class TestReviewedEdges:
+    """Cases a mutation review found unpinned."""
+
+    def test_grow_gap_boundaries(self):
+        from torchsym.image.axes import _grow
+
+        t = np.arange(6) * 4.0 + 1.0  # one sample per 4-px bin, bins 0..5
+        gain = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 5.0])
+        strong = gain != 0
+        assert _grow(t, gain, 4.0, strong, 2) == 8.0  # bins 2-4 empty: 3 > max_gap, stop before them
+        assert _grow(t, gain, 4.0, strong, 3) == 24.0  # a gap of 3 is allowed: reach bin 5
+        assert _grow(t, gain, 4.0, strong, None) == 24.0
+        first_empty = np.array([0.0, 2.0])
+        assert _grow(np.array([1.0, 5.0]), first_empty, 4.0, first_empty != 0, 0) == 0.0  # gap at bin 0
+        assert _grow(np.array([1.0, 5.0]), first_empty, 4.0, first_empty != 0, 1) == 8.0
+        assert _grow(t, gain, 4.0, strong, 10**9) == 24.0  # a huge max_gap allocates nothing large
+
+    def test_duplicates_by_angle_and_containment(self):
+        base = _line(0.0, (100, 100))
+        turned = _line(30.0, (100, 100))  # same centre, 30 deg apart
+        assert suppress_duplicates([base, turned], [(-50.0, 50.0), (-50.0, 50.0)], [2.0, 1.0]) == [0, 1]
+        # a short segment inside the end of a long one on the same line is the same axis
+        assert suppress_duplicates([base, base.copy()], [(-100.0, 100.0), (60.0, 100.0)], [2.0, 1.0]) == [0]
+        with pytest.raises(InputShapeError, match="lines, extents, scores"):
+            suppress_duplicates([base], [(-1.0, 1.0)], [1.0, 2.0])
+        with pytest.raises(InputShapeError, match="lines"):
+            suppress_duplicates([base[:2]], [(-1.0, 1.0)], [1.0])
+        with pytest.raises(InputValueError, match="angle"):
+            suppress_duplicates([base], [(-1.0, 1.0)], [1.0], angle=-1.0)
+
+    def test_support_runs_bad_input(self):
+        line = _line(0.0, (100, 100))
+        pairs = _pairs_about(line, [0, 5])
+        with pytest.raises(InputValueError, match="members"):
+            support_runs(line, pairs, np.array([0, 7]), gap=10.0)
+        with pytest.raises(InputShapeError, match="pairs"):
+            support_runs(line, pairs[:, :3], np.array([0]), gap=10.0)
+        with pytest.raises(InputValueError, match="gap"):
+            support_runs(line, pairs, np.array([0]), gap=-1.0)
+
+    def test_candidate_runs_are_refitted(self):
+        """Two parallel objects 2 px apart on one line: each run gets its own fitted line."""
+        a, b = _line(0.0, (100, 100)), _line(0.0, (102, 100))
+        pairs = np.concatenate([_pairs_about(a, np.linspace(-200, -150, 6)), _pairs_about(b, np.linspace(100, 150, 6))])
+        cands = mirror_pair_candidates(pairs, 480, 640)
+        assert len(cands) == 2
+        for ln, members in cands:
+            mid = 0.5 * (pairs[members, :2] + pairs[members, 2:])
+            assert np.abs(mid @ ln[:2] + ln[2]).max() < 1e-6
+        with pytest.raises(InputValueError, match="height"):
+            mirror_pair_candidates(pairs, 0, 640)
+
+    def test_sift_axes_index_their_own_pairs(self):
+        img, _ = mirrored_objects_image(3, generator=torch.Generator().manual_seed(1003))
+        res = boundary_clique_axes(img)
+        n_bnd = res.info["n_pairs_found"]
+        sift_axes = 0
+        for k in range(len(res)):
+            idx = torch.nonzero(res.pair_axis == k).flatten()
+            pts = res.pairs[idx].double()
+            mid = 0.5 * (pts[:, :2] + pts[:, 2:])
+            assert float((mid @ res.lines[k, :2].double() + res.lines[k, 2]).abs().max()) < 10.0  # on its own line
+            sift_axes += bool((idx >= n_bnd).all())
+        assert sift_axes >= 1
+        half = boundary_clique_axes(img, sift_weight=0.25)
+        full = {tuple(ln): s for ln, s in zip(res.lines.tolist(), res.scores.tolist())}
+        scaled = [(s, full[tuple(ln)]) for ln, s, k in zip(half.lines.tolist(), half.scores.tolist(), range(len(half)))
+                  if tuple(ln) in full and bool((half.pair_axis == k).any()) and
+                  bool((torch.nonzero(half.pair_axis == k).flatten() >= n_bnd).all())]
+        assert scaled and all(s == pytest.approx(0.5 * f, rel=1e-5) for s, f in scaled)  # 0.25 / 0.5
+
+    def test_sift_axes_without_enough_boundary_pairs(self):
+        img, gt = mirrored_objects_image(1, height=240, width=240, generator=torch.Generator().manual_seed(0))
+        res = boundary_clique_axes(img, min_support=10**5)  # no clique can reach this
+        assert len(res) >= 1 and res.info["sift_axes"] >= 1
+        assert bool(match_axes(res.axes[:2], gt, image_size=(240, 240), criterion="challenge").any())
+        assert len(boundary_clique_axes(img, min_support=10**5, sift_candidates=False)) == 0

@@ -361,7 +361,8 @@ def _grow(
     total = np.cumsum(np.bincount(bins, weights=gain, minlength=nb))
     if strong is not None and max_gap is not None:
         empty = np.bincount(bins, weights=strong.astype(np.float64), minlength=nb) == 0  # (nb,)
-        gaps = np.flatnonzero(np.convolve(empty, np.ones(max_gap + 1), "valid") == max_gap + 1)
+        width = min(max_gap, nb) + 1  # a window longer than the bins finds no gap
+        gaps = np.flatnonzero(np.convolve(empty, np.ones(width), "valid") == width) if width <= nb else np.zeros(0, np.int64)
         if gaps.size:  # the first run of max_gap + 1 empty bins starts at gaps[0]
             total = total[: gaps[0]]
             if total.size == 0:
@@ -531,10 +532,22 @@ def support_runs(line: Any, pairs: np.ndarray, members: np.ndarray, gap: float) 
     Returns:
         Index arrays (into ``pairs``), one per run, in order along the line.
     """
-    members = np.asarray(members, dtype=np.int64)
+    from torchsym.core.checks import check_positive
+    from torchsym.errors import InputShapeError, InputValueError
+
+    pairs = np.asarray(pairs, dtype=np.float64)
+    if pairs.ndim != 2 or pairs.shape[1] != 4:
+        raise InputShapeError(f"pairs: expected (P, 4) x1, y1, x2, y2, got shape {pairs.shape}")
+    ln = np.asarray(line, dtype=np.float64).reshape(-1)
+    if ln.shape != (3,):
+        raise InputShapeError(f"line: expected (3,) a, b, c, got shape {np.asarray(line).shape}")
+    gap = check_positive(gap, "gap")
+    members = np.asarray(members, dtype=np.int64).reshape(-1)
+    if members.size and (members.min() < 0 or members.max() >= pairs.shape[0]):
+        raise InputValueError(f"members: expected indices in [0, {pairs.shape[0] - 1}], got {members.min()}..{members.max()}")
     if members.size == 0:
         return []
-    a, b = float(line[0]), float(line[1])
+    a, b = float(ln[0]), float(ln[1])
     mid = 0.5 * (pairs[members, :2] + pairs[members, 2:])  # (M, 2)
     t = mid @ np.array([-b, a])
     order = np.argsort(t, kind="stable")
@@ -553,9 +566,10 @@ def suppress_duplicates(
     """Indices of the axes kept after dropping near-duplicates of better-scored ones.
 
     Axis ``j`` duplicates a kept axis ``i`` when the lines are within ``angle`` degrees,
-    the centre of ``j``'s segment is within ``distance`` pixels of ``i``'s line, and the
-    two centres are less than half the mean segment length apart along it (the same
-    object found twice, e.g. by two sources of candidate axes).
+    the centre of ``j``'s segment is within ``distance`` pixels of ``i``'s line, and,
+    projected onto ``i``'s line, the two segments overlap by at least half the shorter
+    one: the same object found twice (by two sources of candidate axes, or by two
+    clusters on one line), while two objects on one line are both kept.
 
     Args:
         lines: ``(3,)`` lines with unit normals.
@@ -568,24 +582,35 @@ def suppress_duplicates(
     Returns:
         Kept indices, best score first.
     """
+    from torchsym.core.checks import check_in_range, check_positive
+    from torchsym.errors import InputShapeError
+
+    if not len(lines) == len(extents) == len(scores):
+        raise InputShapeError(f"lines, extents, scores: expected one of each per axis, got {len(lines)}, {len(extents)}, {len(scores)}")
+    angle = check_in_range(angle, "angle", 0.0, 90.0)
+    distance = check_positive(distance, "distance")
     cos_tol = math.cos(math.radians(angle))
     geo = []
-    for ln, (lo, hi) in zip(lines, extents):
-        a, b, c = (float(v) for v in ln)
+    for k, (ln, ext) in enumerate(zip(lines, extents)):
+        ln = np.asarray(ln, dtype=np.float64).reshape(-1)
+        if ln.shape != (3,) or len(ext) != 2:
+            raise InputShapeError(f"lines[{k}], extents[{k}]: expected (a, b, c) and (t_lo, t_hi), got {ln.shape} and {len(ext)} values")
+        a, b, c = ln
         d = np.array([-b, a])
-        centre = np.array([-c * a, -c * b]) + 0.5 * (lo + hi) * d
-        geo.append((np.array([a, b]), c, d, centre, hi - lo))
+        foot = np.array([-c * a, -c * b])
+        ends = foot + np.outer(sorted(float(t) for t in ext), d)  # (2, 2)
+        geo.append((np.array([a, b]), c, d, ends))
     keep: list[int] = []
     for j in sorted(range(len(lines)), key=lambda k: -scores[k]):
-        nj, _, _, cj, lj = geo[j]
+        nj, _, _, ej = geo[j]
         duplicate = False
         for i in keep:
-            ni, ci_off, di, ci, li = geo[i]
-            if (
-                abs(float(nj @ ni)) > cos_tol
-                and abs(float(ni @ cj) + ci_off) < distance
-                and abs(float((cj - ci) @ di)) < 0.25 * (li + lj)
-            ):
+            ni, ci_off, di, ei = geo[i]
+            if abs(float(nj @ ni)) <= cos_tol or abs(float(ni @ ej.mean(0)) + ci_off) >= distance:
+                continue
+            si, sj = np.sort(ei @ di), np.sort(ej @ di)  # both segments along i's line
+            overlap = min(si[1], sj[1]) - max(si[0], sj[0])
+            if overlap >= 0.5 * min(si[1] - si[0], sj[1] - sj[0]):
                 duplicate = True
                 break
         if not duplicate:

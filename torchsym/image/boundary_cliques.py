@@ -334,9 +334,9 @@ def _check_settings(*, edges, sigma, low_threshold, high_threshold, segment_leng
     max_pairs = check_int(max_pairs, "max_pairs", minimum=2)
     max_axes = check_int(max_axes, "max_axes", minimum=1)
     min_support = check_int(min_support, "min_support", minimum=2)
-    if sift_candidates is not None and not isinstance(sift_candidates, bool):
+    if sift_candidates is not None and not isinstance(sift_candidates, (bool, np.bool_)):
         raise InputValueError(f"sift_candidates: expected True, False or None, got {sift_candidates!r}")
-    if sift_candidates is True and score != "gradient":
+    if sift_candidates is not None and bool(sift_candidates) and score != "gradient":
         raise InputValueError(f"sift_candidates: needs score='gradient' (its axes are ranked by their evidence), got score={score!r}")
     check_positive(sift_weight, "sift_weight")
     check_int(num_features, "num_features", minimum=1)
@@ -430,8 +430,11 @@ def boundary_clique_axes(
         sift_candidates: add the axes of mirrored-SIFT pairs (Sec. 2.2.1, shared with
             :func:`~torchsym.image.ksymmetry.ksymmetry_axes`) as a second source of
             candidates (not in the thesis): candidates by greedy inlier counting
-            (:func:`~torchsym.image.ksymmetry.mirror_pair_candidates`), each split into
-            runs along its line, checked by the same dense evidence as the cliques' axes
+            (:func:`~torchsym.image.ksymmetry.mirror_pair_candidates` with its defaults: at
+            least 4 pairs within 3 deg and ``0.01 max(H, W)``, runs split at gaps over
+            ``0.1 max(H, W)``; ``k1`` chosen automatically, keypoints at least 5 px
+            apart; ``min_support`` does not apply to them), each split into runs along
+            its line, checked by the same dense evidence as the cliques' axes
             and scored ``sift_weight`` times as much; an axis found by both sources is kept
             once (:func:`~torchsym.image.axes.suppress_duplicates`, 10 deg and
             ``axis_distance``). Boundary pairs need both sides of an object's outline
@@ -469,8 +472,7 @@ def boundary_clique_axes(
                     max_pairs=max_pairs, max_axes=max_axes, min_support=min_support, clique_solver=clique_solver,
                     score=score, grow_threshold=grow_threshold, sift_candidates=sift_candidates,
                     sift_weight=sift_weight, num_features=num_features)
-    if sift_candidates is None:
-        sift_candidates = score == "gradient"
+    sift_candidates = score == "gradient" if sift_candidates is None else bool(sift_candidates)
     h, w = int(img.shape[-2]), int(img.shape[-1])
     t0 = time.perf_counter()
     stages: dict[str, float] = {}
@@ -573,6 +575,8 @@ def boundary_clique_axes(
         lines, supports, scores, extents = ([seq[k] for k in keep] for seq in (lines, supports, scores, extents))
         stages["sift"] = time.perf_counter() - tic
     info.update(clique_fallbacks=fallbacks, axes_without_evidence=evidence_free, seconds=time.perf_counter() - t0)
+    if not lines:
+        info["reason"] = "no axis with mirrored gradients" if n_found >= min_support or sift_candidates else "too few symmetric boundary pairs"
     return build_result(lines, supports, scores, torch.from_numpy(all_pairs), h, w, "boundary_cliques",
                         converged=fallbacks == 0, extents=extents or None, **info)
 

@@ -60,6 +60,7 @@ from torchsym.image.axes import (
     mirror_gradients,
     run_batched,
     support_runs,
+    suppress_duplicates,
 )
 
 __all__ = [
@@ -170,6 +171,9 @@ def mirror_sift_pairs(
         ``pairs (P, 4)`` float64 ``x1, y1, x2, y2`` in pixels and the ``k1`` used (0 when
         there were fewer than two keypoints).
     """
+    min_pair_distance = check_positive(min_pair_distance, "min_pair_distance", allow_zero=True)
+    if k1 is not None:
+        k1 = check_int(k1, "k1", minimum=1)
     feats = detect_sift(image, num_features=num_features)
     if len(feats) < 2:
         return torch.zeros(0, 4, dtype=torch.float64), 0
@@ -260,7 +264,8 @@ def mirror_pair_candidates(
         angle_tol: angle tolerance, degrees.
         distance_tol: distance tolerance as a fraction of the image's longer side.
         min_support: the least inliers of a candidate.
-        max_candidates: the most candidates (before splitting).
+        max_candidates: the most greedy rounds; each round gives one candidate, or one
+            per run when ``gap`` splits it, so more candidates may come back.
         gap: with a value, each candidate's inliers are split into runs along the line at
             gaps longer than ``gap * max(height, width)``
             (:func:`~torchsym.image.axes.support_runs`: two objects on one line, or an
@@ -268,10 +273,12 @@ def mirror_pair_candidates(
             pairs is refitted as its own candidate; None keeps them whole.
 
     Returns:
-        ``(line (3,), members (M,))`` per candidate, most inliers first (runs of one
-        candidate in order along its line); ``members`` index ``pairs``.
+        ``(line (3,), members (M,))`` per candidate, in the order of the greedy rounds
+        (most inliers first; the runs of one round in order along its line);
+        ``members`` index ``pairs``.
     """
     pairs = _check_pairs(pairs)
+    height, width = check_int(height, "height", minimum=1), check_int(width, "width", minimum=1)
     angle_tol = check_positive(angle_tol, "angle_tol")
     distance_tol = check_positive(distance_tol, "distance_tol")
     min_support = check_int(min_support, "min_support", minimum=1)
@@ -350,7 +357,8 @@ def ksymmetry_axes(
               refitted and checked densely by :func:`~torchsym.image.axes.axis_evidence`
               (score ``symmetry * sqrt(area) * log(1 + n)``, extent grown by
               ``grow_threshold``); runs without mirrored gradients are dropped
-              (``info["axes_without_evidence"]``). Clustering assigns every pair within
+              (``info["axes_without_evidence"]``), and an axis found by two clusters is
+              kept once (:func:`~torchsym.image.axes.suppress_duplicates`). Clustering assigns every pair within
               ``outlier_cost`` to some axis, so a cluster's pairs spread along its line
               beyond the object: on the synthetic 2-3 object images of
               ``benchmarks/bench_axes.py`` the axes of ``"support"`` were right in angle
@@ -389,7 +397,7 @@ def ksymmetry_axes(
     t0 = time.perf_counter()
     pairs, k1 = mirror_sift_pairs(img, num_features=num_features, k1=k1, min_pair_distance=min_pair_distance)  # (P, 4)
     if pairs.shape[0] == 0 and k1 == 0:
-        return empty_result(h, w, "ksymmetry", k1=None, reason="fewer than 2 keypoints")
+        return empty_result(h, w, "ksymmetry", k1=None, reason="fewer than 2 keypoints")  # k1 never used
     if pairs.shape[0] < min_support:
         return empty_result(h, w, "ksymmetry", pairs=pairs, k1=k1, reason="too few mirror pairs")
     centre = torch.tensor([(w - 1) / 2, (h - 1) / 2], dtype=torch.float64)
@@ -448,7 +456,11 @@ def ksymmetry_axes(
             supports.append(torch.from_numpy(run))
             scores.append(value)
             extents.append(ev.extent)
-    extra = {"axes_without_evidence": evidence_free} if grads is not None else {}
+    extra = {}
+    if grads is not None:  # clusters on one line may give overlapping runs: keep each axis once
+        keep = suppress_duplicates([ln.numpy() for ln in lines], extents, scores, distance=GATHER_DISTANCE * max(h, w))
+        extra = {"axes_without_evidence": evidence_free, "duplicates_dropped": len(lines) - len(keep)}
+        lines, supports, scores, extents = ([seq[k] for k in keep] for seq in (lines, supports, scores, extents))
     return build_result(
         lines, supports, scores, pairs, h, w, "ksymmetry", converged=converged, extents=extents or None,
         k1=k1, k=k_best, cost_curve=curve, n_iter=n_iter, seconds=time.perf_counter() - t0, **extra,
