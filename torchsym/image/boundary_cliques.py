@@ -433,9 +433,8 @@ def boundary_clique_axes(
             (:func:`~torchsym.image.ksymmetry.mirror_pair_candidates` with its defaults: at
             least 4 pairs within 3 deg and ``0.01 max(H, W)``, runs split at gaps over
             ``0.1 max(H, W)``; ``k1`` chosen automatically, keypoints at least 5 px
-            apart; ``min_support`` does not apply to them), each split into runs along
-            its line, checked by the same dense evidence as the cliques' axes
-            and scored ``sift_weight`` times as much; an axis found by both sources is kept
+            apart; ``min_support`` does not apply to them), checked by the same dense
+            evidence as the cliques' axes and scored ``sift_weight`` times as much; an axis found by both sources is kept
             once (:func:`~torchsym.image.axes.suppress_duplicates`, 10 deg and
             ``axis_distance``). Boundary pairs need both sides of an object's outline
             found and mirrored over a ``segment_length`` arc; on textured objects against
@@ -452,7 +451,8 @@ def boundary_clique_axes(
             default) uses them with ``score="gradient"`` only; True needs that score.
         sift_weight: factor on the score of axes from SIFT pairs. Descriptor matches
             include repeated texture that Eq. 2.9 never pairs; at 1 the dev max F fell
-            to 0.375 (thesis criterion), from 0.3 to 0.7 it stayed 0.426 / 0.68-0.71.
+            to 0.375 / 0.667 (thesis / challenge criterion), at 0.3, 0.5 and 0.7 it was
+            0.426 / 0.680, 0.704 and 0.706.
         num_features: the most SIFT keypoints (``sift_candidates``).
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
