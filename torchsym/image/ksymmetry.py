@@ -363,9 +363,10 @@ def ksymmetry_axes(
               beyond the object: on the synthetic 2-3 object images of
               ``benchmarks/bench_axes.py`` the axes of ``"support"`` were right in angle
               (within 0.3 deg) but their segment centres missed by up to 140 px. There
-              ``"gradient"`` found 14 of 25 planted axes against 5, but on the 32 dev
-              photographs its max F was lower (0.211 / 0.578 against 0.263 / 0.590,
-              thesis / challenge criterion), hence not the default.
+              ``"gradient"`` found 14 of the first 25 planted axes against 5; on the 32
+              dev photographs its max F was 0.231 / 0.658 against 0.263 / 0.590 (thesis /
+              challenge criterion): better segments, but a worse best axis under the
+              thesis's strict criterion, so the thesis's ranking stays the default.
         grow_threshold: with ``score="gradient"``, see
             :func:`~torchsym.image.axes.axis_evidence`; None keeps the runs' extent.
 
