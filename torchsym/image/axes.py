@@ -342,6 +342,11 @@ class AxisEvidence(Result):
     area: float
     extent: tuple[float, float]
 
+    def score(self, support: int) -> float:
+        """The axis score of both methods' ``score="gradient"``: ``symmetry * sqrt(area) *
+        log(1 + support)`` (negative symmetry counts as 0), for ``support`` mirror pairs."""
+        return max(self.symmetry, 0.0) * math.sqrt(max(self.area, 0.0)) * math.log1p(support)
+
 
 def _grow(
     t: np.ndarray, gain: np.ndarray, bin_length: float, strong: np.ndarray | None = None, max_gap: int | None = None

@@ -542,7 +542,7 @@ def boundary_clique_axes(
         if score == "gradient":
             ev = axis_evidence(*grads, line, all_pairs[members], min_half_width=segment_length / 3,
                                grow_threshold=grow_threshold)
-            value = max(ev.symmetry, 0.0) * math.sqrt(max(ev.area, 0.0)) * math.log1p(members.size)
+            value = ev.score(members.size)
             extent = ev.extent
         elif score == "photometric":
             pts = all_pairs[members].reshape(-1, 2)
@@ -565,7 +565,7 @@ def boundary_clique_axes(
         for line, run in mirror_pair_candidates(sift_pairs, h, w):
             ev = axis_evidence(*grads, line, sift_pairs[run], min_half_width=segment_length / 3,
                                grow_threshold=grow_threshold)
-            value = sift_weight * max(ev.symmetry, 0.0) * math.sqrt(max(ev.area, 0.0)) * math.log1p(run.size)
+            value = sift_weight * ev.score(run.size)
             if value > 0:
                 lines.append(torch.from_numpy(line))
                 supports.append(torch.from_numpy(run + all_pairs.shape[0]))

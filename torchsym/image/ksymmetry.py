@@ -449,7 +449,7 @@ def ksymmetry_axes(
                 continue
             fit = _fit_axis(pairs_np[run], centre.numpy(), scale)
             ev = axis_evidence(*grads, fit, pairs_np[run], grow_threshold=grow_threshold)
-            value = max(ev.symmetry, 0.0) * math.sqrt(max(ev.area, 0.0)) * math.log1p(run.size)
+            value = ev.score(run.size)
             if value <= 0:
                 evidence_free += 1
                 continue
