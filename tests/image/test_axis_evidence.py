@@ -11,7 +11,13 @@ import torch
 
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.image import boundary_clique_axes
-from torchsym.image.axes import axis_evidence, clip_line_to_image, mirror_gradients
+from torchsym.image.axes import (
+    EDGE_NOISE,
+    axis_evidence,
+    clip_line_to_image,
+    gradient_noise,
+    mirror_gradients,
+)
 
 
 def _rotation(angle: float, centre=(100.0, 100.0)) -> np.ndarray:
@@ -127,6 +133,98 @@ class TestAxisEvidence:
         assert off.area == 0.0 and off.symmetry == 0.0
 
 
+def _moved(points: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """``(M, 4)`` pairs given before turning, turned by the 2 x 3 map ``m``."""
+    p = points.reshape(-1, 2) @ m[:, :2].T + m[:, 2]
+    return p.reshape(-1, 4)
+
+
+class TestExtentRules:
+    """The extent's guards: pairs along the axis, the noise level, edge crossings."""
+
+    @pytest.mark.parametrize("angle", [0.0, 35.0])
+    def test_pairs_along_the_axis_stretch_only_nearby(self, angle):
+        """Points on the line stretch the mirror pairs' extent in steps of at most along_gap x 200 px."""
+        img, m = _kite(angle)
+        line, pairs = _kite_axis_and_pairs(m)  # mirror pairs on rows 100..130
+        along = _moved(np.array([[100.0, 135.0, 100.0, 190.0], [100.0, 92.0, 100.0, 15.0]]), m)  # chords on the axis
+        at = {y: _t(line, _moved(np.array([[100.0, y, 0.0, 0.0]]), m)[0, :2]) for y in (15.0, 92.0, 135.0, 190.0)}
+        gx, gy = mirror_gradients(img)
+        every = np.concatenate([pairs, along])
+        # default along_gap 0.1 x 200 = 20 px: 135 (5 px on) and 92 (8 px) count, 190 and 15 are too far
+        ends = sorted(axis_evidence(gx, gy, line, every, grow_threshold=None).extent)
+        assert ends == pytest.approx(sorted((at[92.0], at[135.0])), abs=1e-6)
+        old = sorted(axis_evidence(gx, gy, line, every, grow_threshold=None, along_gap=None).extent)
+        assert old == pytest.approx(sorted((at[15.0], at[190.0])), abs=1e-6)
+        only_along = sorted(axis_evidence(gx, gy, line, along, grow_threshold=None).extent)  # no mirror pair: every point
+        assert only_along == pytest.approx(old, abs=1e-6)
+
+    @staticmethod
+    def _faint_kite_on_shading(contrast: float = 0.1) -> np.ndarray:
+        """A faint kite on a noisy brightness ramp along its axis (shading that is its own mirror image)."""
+        yy = np.arange(200, dtype=np.float32)[:, None].repeat(200, 1)
+        img = 0.3 + 0.002 * (yy - 100)
+        mask = np.zeros((200, 200), np.float32)
+        poly = np.array([[100, 40], [135, 90], [100, 160], [65, 90]], np.float64)
+        cv2.fillPoly(mask, [np.round(poly * 16).astype(np.int32)], 1.0, cv2.LINE_AA, shift=4)
+        return img + contrast * mask + 0.02 * np.random.default_rng(0).standard_normal(img.shape).astype(np.float32)
+
+    def test_noise_level_stops_growth_in_shading(self):
+        gx, gy = mirror_gradients(self._faint_kite_on_shading())
+        line, pairs = _kite_axis_and_pairs(_rotation(0.0), y0=60.0)
+        lo, hi = axis_evidence(gx, gy, line, pairs, noise_level=EDGE_NOISE * gradient_noise(gx, gy)).extent
+        assert lo == pytest.approx(40, abs=5) and hi == pytest.approx(160, abs=5)
+        lo, hi = axis_evidence(gx, gy, line, pairs).extent  # relative rule alone: noise counts as edges
+        assert lo < 10 and hi > 190
+
+    @pytest.mark.parametrize("angle", [0.0, 35.0])
+    def test_crossings_trim_a_stray_pair(self, angle):
+        img, m = _kite(angle)
+        line, pairs = _kite_axis_and_pairs(m)
+        stray = _moved(np.array([[90.0, 185.0, 110.0, 185.0]]), m)  # mirrored, but beyond the kite
+        every = np.concatenate([pairs, stray])
+        gx, gy = mirror_gradients(img)
+        tip, bottom, beyond = (_t(line, _moved(np.array([[100.0, y, 0, 0]]), m)[0, :2]) for y in (40.0, 160.0, 185.0))
+        ends = sorted(axis_evidence(gx, gy, line, every, crossings=True).extent)
+        assert ends == pytest.approx(sorted((tip, bottom)), abs=5)
+        plain = sorted(axis_evidence(gx, gy, line, every).extent)
+        assert plain[0] == pytest.approx(min(tip, beyond), abs=5) and plain[1] == pytest.approx(max(tip, beyond), abs=5)
+
+    def test_crossings_keep_the_extent_when_most_pairs_lie_outside(self):
+        """Pairs on rows 150..195: the only crossing is near the kite's bottom; trimming to it would drop 6 of 10 midpoints."""
+        img, _ = _kite()
+        y = np.linspace(150.0, 195.0, 10)
+        pairs = np.stack([np.full(10, 90.0), y, np.full(10, 110.0), y], 1)
+        line = np.array([1.0, 0.0, -100.0])
+        gx, gy = mirror_gradients(img)
+        noise = EDGE_NOISE * gradient_noise(gx, gy)  # else the background's noise crosses the line everywhere
+        kept = axis_evidence(gx, gy, line, pairs, crossings=True, noise_level=noise).extent
+        assert kept == axis_evidence(gx, gy, line, pairs, noise_level=noise).extent and kept[1] == pytest.approx(195.0)
+        few = pairs[:3]  # rows 150..160, all at the crossing: trimmed to it, where the growth went up the kite
+        grown = axis_evidence(gx, gy, line, few, noise_level=noise).extent
+        trimmed = axis_evidence(gx, gy, line, few, crossings=True, noise_level=noise).extent
+        assert grown[0] < 140 and 148 <= trimmed[0] <= 156 and trimmed[1] == pytest.approx(160, abs=3)
+        blank = np.zeros_like(gx)
+        assert axis_evidence(blank, blank, line, pairs, crossings=True).extent == pytest.approx((150.0, 195.0))
+
+    def test_gradient_noise(self):
+        flat = np.zeros((30, 40), np.float32)
+        assert gradient_noise(flat, flat) == 0.0
+        gx, gy = mirror_gradients(np.random.default_rng(3).random((64, 64)).astype(np.float32))
+        assert gradient_noise(gx, gy) == pytest.approx(float(np.median(np.hypot(gx, gy))))
+        assert gradient_noise(gx, gy) > 0
+
+    def test_bad_settings(self):
+        gx, gy = mirror_gradients(np.zeros((20, 20), np.float32))
+        line, pair = np.array([1.0, 0.0, -10.0]), np.array([[5.0, 10.0, 15.0, 10.0]])
+        with pytest.raises(InputValueError, match="chord_angle"):
+            axis_evidence(gx, gy, line, pair, chord_angle=120.0)
+        with pytest.raises(InputValueError, match="along_gap"):
+            axis_evidence(gx, gy, line, pair, along_gap=-0.1)
+        with pytest.raises(InputValueError, match="noise_level"):
+            axis_evidence(gx, gy, line, pair, noise_level=-1.0)
+
+
 class TestScores:
     def test_support_scores_count_pairs(self, single_objects):
         img, _ = single_objects[0]
@@ -141,10 +239,11 @@ class TestScores:
         plain = boundary_clique_axes(img, grow_threshold=None, sift_candidates=False)
         assert torch.equal(res.lines, plain.lines) and len(res) >= 2
         gx, gy = mirror_gradients(img.mean(0).numpy())
+        noise = EDGE_NOISE * gradient_noise(gx, gy)  # the image's noise level, as the detector sets it
         longer = 0
         for k in range(len(res)):
             sup = res.pairs[res.pair_axis == k].double().numpy()
-            ev = axis_evidence(gx, gy, res.lines[k].double().numpy(), sup, min_half_width=8.0)
+            ev = axis_evidence(gx, gy, res.lines[k].double().numpy(), sup, min_half_width=8.0, noise_level=noise)
             seg = clip_line_to_image(res.lines[k].double(), *ev.extent, 240, 240)
             assert res.axes[k].tolist() == pytest.approx(seg, abs=1e-3)
             score = max(ev.symmetry, 0.0) * math.sqrt(ev.area) * math.log1p(sup.shape[0])
