@@ -556,8 +556,9 @@ def axis_evidence(
     tt = np.repeat(ts, ss.size)
     part = np.repeat(part, ss.size)
     gpx, gpy = _bilinear(gx, p[:, 0], p[:, 1]), _bilinear(gy, p[:, 0], p[:, 1])
-    q = p - 2 * (p @ n + c)[:, None] * n  # mirror points
-    qx, qy = _bilinear(gx, q[:, 0], q[:, 1]), _bilinear(gy, q[:, 0], q[:, 1])
+    # the offsets are symmetric (ss[j] = -ss[S - 1 - j]), so the mirror point of each
+    # sample is the sample in the mirrored column: its gradient is already sampled
+    qx, qy = (v.reshape(ts.size, ss.size)[:, ::-1].reshape(-1) for v in (gpx, gpy))
     dn = qx * a + qy * b
     rx, ry = qx - 2 * dn * a, qy - 2 * dn * b  # R g(p')
     ok = np.isfinite(gpx) & np.isfinite(rx)
