@@ -207,6 +207,30 @@ class TestExtentRules:
         blank = np.zeros_like(gx)
         assert axis_evidence(blank, blank, line, pairs, crossings=True).extent == pytest.approx((150.0, 195.0))
 
+    def test_support_split_at_empty_background(self):
+        """Pairs on two diamonds on one line, 70 px of background apart: the evidence is the better-supported one's."""
+        img = np.full((300, 200), 0.2, np.float32)
+        for poly in ([[100, 20], [130, 50], [100, 110], [70, 50]], [[100, 180], [125, 210], [100, 260], [75, 210]]):
+            cv2.fillPoly(img, [np.round(np.array(poly, np.float64) * 16).astype(np.int32)], 0.8, cv2.LINE_AA, shift=4)
+        img += 0.02 * np.random.default_rng(0).standard_normal(img.shape).astype(np.float32)
+
+        def edge_pairs(y0, y1, k, wide_y, half_w, bottom):  # mirror pairs on a diamond's lower edges
+            y = np.linspace(y0, y1, k)
+            h = half_w * (bottom - y) / (bottom - wide_y)
+            return np.stack([100 - h, y, 100 + h, y], 1)
+
+        pairs = np.concatenate([edge_pairs(60, 100, 9, 50, 30, 110), edge_pairs(215, 250, 4, 210, 25, 260)])
+        line = np.array([1.0, 0.0, -100.0])
+        gx, gy = mirror_gradients(img)
+        noise = EDGE_NOISE * gradient_noise(gx, gy)
+        split = axis_evidence(gx, gy, line, pairs, noise_level=noise)
+        assert split.extent == pytest.approx((20, 110), abs=5)
+        assert split == axis_evidence(gx, gy, line, pairs[:9], noise_level=noise)  # exactly the first diamond's
+        whole = axis_evidence(gx, gy, line, pairs, noise_level=noise, split_gap=None)
+        assert whole.extent == pytest.approx((20, 260), abs=5) and whole.area > 3 * split.area
+        with pytest.raises(InputValueError, match="split_gap"):
+            axis_evidence(gx, gy, line, pairs, split_gap=-1)
+
     def test_gradient_noise(self):
         flat = np.zeros((30, 40), np.float32)
         assert gradient_noise(flat, flat) == 0.0
