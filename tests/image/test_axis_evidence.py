@@ -225,11 +225,24 @@ class TestExtentRules:
         noise = EDGE_NOISE * gradient_noise(gx, gy)
         split = axis_evidence(gx, gy, line, pairs, noise_level=noise)
         assert split.extent == pytest.approx((20, 110), abs=5)
-        assert split == axis_evidence(gx, gy, line, pairs[:9], noise_level=noise)  # exactly the first diamond's
+        first = axis_evidence(gx, gy, line, pairs[:9], noise_level=noise)  # exactly the first diamond's
+        assert (split.symmetry, split.area, split.extent) == (first.symmetry, first.area, first.extent)
+        assert split.kept == tuple(range(9)) and first.kept is None
         whole = axis_evidence(gx, gy, line, pairs, noise_level=noise, split_gap=None)
-        assert whole.extent == pytest.approx((20, 260), abs=5) and whole.area > 3 * split.area
+        assert whole.extent == pytest.approx((20, 260), abs=5) and whole.area > 3 * split.area and whole.kept is None
+        assert axis_evidence(gx, gy, line, pairs, noise_level=noise, split_gap=30).extent == whole.extent  # gap ~17 bins
         with pytest.raises(InputValueError, match="split_gap"):
             axis_evidence(gx, gy, line, pairs, split_gap=-1)
+
+    def test_crossings_never_invert_the_extent(self):
+        """Crossings only within the search slack beyond the lower end: the extent is kept, not inverted."""
+        img, _ = _kite()
+        gx, gy = mirror_gradients(img)
+        rows = np.array([164.0, 165.0, 166.0, 190.0])
+        pairs = np.stack([np.full(4, 95.0), rows, np.full(4, 105.0), rows], 1)
+        lo, hi = axis_evidence(gx, gy, np.array([1.0, 0.0, -100.0]), pairs, crossings=True, grow_threshold=1.0,
+                               split_gap=None, noise_level=0.05).extent
+        assert lo < hi and (lo, hi) == pytest.approx((164.0, 190.0))
 
     def test_gradient_noise(self):
         flat = np.zeros((30, 40), np.float32)
@@ -247,6 +260,10 @@ class TestExtentRules:
             axis_evidence(gx, gy, line, pair, along_gap=-0.1)
         with pytest.raises(InputValueError, match="noise_level"):
             axis_evidence(gx, gy, line, pair, noise_level=-1.0)
+        with pytest.raises(InputValueError, match="crossings"):
+            axis_evidence(gx, gy, line, pair, crossings="no")
+        with pytest.raises(InputShapeError, match="gx, gy"):
+            gradient_noise(gx, gy[:5])
 
 
 class TestScores:

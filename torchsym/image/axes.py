@@ -331,7 +331,11 @@ def gradient_noise(gx: np.ndarray, gy: np.ndarray) -> float:
     synthetic benchmark images the background's smoothed noise peaks at about twice the
     median, while object edges are ten times it and more.
     """
+    from torchsym.errors import InputShapeError
+
     gx, gy = np.asarray(gx), np.asarray(gy)
+    if gx.shape != gy.shape:
+        raise InputShapeError(f"gx, gy: expected two arrays of one shape, got {gx.shape} and {gy.shape}")
     return float(np.median(np.hypot(gx, gy))) if gx.size else 0.0
 
 
@@ -354,12 +358,16 @@ class AxisEvidence(Result):
         area: the part of that band where both ``p`` and ``p'`` lie in the image, as a
             fraction of the image's area.
         extent: ``(t_lo, t_hi)`` along the line (parameter of :func:`clip_line_to_image`),
-            the support's extent grown where the mirror evidence continues.
+            the support's extent grown where the mirror evidence continues (and trimmed
+            to edge crossings with ``crossings``).
+        kept: indices of the pairs the evidence rests on when the support was cut at
+            empty background (``split_gap`` of :func:`axis_evidence`); None: every pair.
     """
 
     symmetry: float
     area: float
     extent: tuple[float, float]
+    kept: tuple[int, ...] | None = None
 
     def score(self, support: int) -> float:
         """The axis score of both methods' ``score="gradient"``: ``symmetry * sqrt(area) *
@@ -456,7 +464,8 @@ def axis_evidence(
       shading (mirror symmetric along the axis) kept the gain positive, and segments grew
       to the image border (3 of the 4 axes missed on the 30 synthetic benchmark images).
     - Pairs along the axis: a pair whose chord is more than ``chord_angle`` degrees from
-      the normal is no mirror pair of this axis. Its two points are boundary points on
+      the normal is no mirror pair of this axis (a zero-length chord counts as a mirror
+      pair). Its two points are boundary points on
       the line, where an outline crosses its own axis (Eq. 2.9 accepts such a pair,
       since each segment is its own mirror image): the ends of an object, or of another
       object further along the line. With ``along_gap``, the extent is that of the true
@@ -469,12 +478,14 @@ def axis_evidence(
       ``[t0, t1]`` hold no counted gradient (by the growth's rules: above
       ``edge_fraction`` of the support's mean and above ``noise_level``), the band
       crosses empty background there; the support is cut at such gaps and the evidence
-      is that of the part holding the most pair midpoints (with growth only). On 30
+      is that of the part holding the most pair midpoints (the first along the line on
+      a tie; :attr:`AxisEvidence.kept` lists its pairs; with growth only). On 30
       fresh synthetic images (seeds 3000-3029) this found the last missed axis (75 of
       75); dev max F and the benchmark's 30 images were unchanged.
     - ``crossings``: the grown extent is trimmed to the outermost points where an edge
-      crosses the line (within 1 px, a gradient above the growth's edge level), unless
-      that would leave out half of the pairs' midpoints. A symmetric object's outline
+      crosses the line (within 1 px, a gradient at least the growth's edge level;
+      searched one bin beyond each end), unless the trimmed extent, widened by a bin,
+      would leave out half of the pairs' midpoints. A symmetric object's outline
       crosses its axis at both ends, while a stray pair beyond it (two mirrored blobs of
       texture) need not. Meant for keypoint pairs
       (:func:`~torchsym.image.ksymmetry.mirror_pair_candidates`), which sit on blobs
@@ -539,6 +550,8 @@ def axis_evidence(
     if max_gap is not None:
         max_gap = check_int(max_gap, "max_gap", minimum=0)
     noise_level = check_positive(noise_level, "noise_level", allow_zero=True)
+    if not isinstance(crossings, (bool, np.bool_)):
+        raise InputValueError(f"crossings: expected True or False, got {crossings!r}")
     chord_angle = check_in_range(chord_angle, "chord_angle", 0.0, 90.0)
     if along_gap is not None:
         along_gap = check_positive(along_gap, "along_gap", allow_zero=True)
@@ -590,12 +603,13 @@ def axis_evidence(
         if split_gap is not None and pairs.shape[0] > 1:
             keep = _split_support(pairs, foot, d, t0, t1, tt[part == 0], strong[part == 0], bin_length, split_gap)
             if keep is not None:
-                return axis_evidence(
+                part_ev = axis_evidence(
                     gx, gy, ln, pairs[keep], min_half_width=min_half_width, min_offset=min_offset,
                     grow_threshold=grow_threshold, edge_fraction=edge_fraction, step=step, bin_length=bin_length,
                     max_gap=max_gap, noise_level=noise_level, chord_angle=chord_angle, along_gap=along_gap,
                     crossings=crossings, split_gap=None,
                 )
+                return dataclasses.replace(part_ev, kept=tuple(int(i) for i in np.flatnonzero(keep)))
         gain = np.where(strong, dot2 - grow_threshold * energy, 0.0)
         up, down = part == 1, part == 2
         hi = t1 + _grow(tt[up] - t1, gain[up], bin_length, strong[up], max_gap)
@@ -661,8 +675,9 @@ def _trim_to_crossings(
     extent: tuple[float, float], mids: np.ndarray, level: float, slack: float,
 ) -> tuple[float, float]:
     """``extent`` trimmed to the outermost points of the line (within 1 px) whose gradient
-    magnitude is at least ``level``; kept whole when the trimmed extent would hold fewer
-    than half of the pairs' midpoints ``mids`` (positions along the line)."""
+    magnitude is at least ``level``, searched ``slack`` beyond each end; kept whole when
+    the trimmed extent, widened by ``slack``, would hold fewer than half of the pairs'
+    midpoints ``mids`` (positions along the line), or would be empty."""
     lo, hi = extent
     ts = np.arange(lo - slack, hi + slack + 1e-9, 1.0)  # (T,)
     mag = np.zeros(ts.size)
@@ -674,6 +689,8 @@ def _trim_to_crossings(
     if cross.size == 0:
         return lo, hi
     a, b = max(lo, float(cross.min())), min(hi, float(cross.max()))
+    if a >= b:  # the only crossings lie within the slack beyond one end
+        return lo, hi
     held = np.count_nonzero((mids >= a - slack) & (mids <= b + slack))
     return (a, b) if 2 * held >= mids.size else (lo, hi)
 

@@ -559,6 +559,10 @@ def boundary_clique_axes(
         if score == "gradient":
             ev = axis_evidence(*grads, line, all_pairs[members], min_half_width=segment_length / 3,
                                grow_threshold=grow_threshold, noise_level=noise)
+            if ev.kept is not None:  # cut at empty background: the rest may support another axis
+                kept = members[list(ev.kept)]
+                free[np.setdiff1d(members, kept)] = True
+                members = kept
             value = ev.score(members.size)
             extent = ev.extent
         elif score == "photometric":
@@ -582,6 +586,8 @@ def boundary_clique_axes(
         for line, run in mirror_pair_candidates(sift_pairs, h, w):
             ev = axis_evidence(*grads, line, sift_pairs[run], min_half_width=segment_length / 3,
                                grow_threshold=grow_threshold, noise_level=noise, crossings=True)
+            if ev.kept is not None:
+                run = run[list(ev.kept)]
             value = sift_weight * ev.score(run.size)
             if value > 0:
                 lines.append(torch.from_numpy(line))
