@@ -19,7 +19,7 @@ from torchsym.geometry.reflection import (
 )
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 
-__all__ = ["alternate", "point_normals", "pre_align", "support"]
+__all__ = ["alternate", "kernel_refine", "kernel_score", "point_normals", "pre_align", "support"]
 
 # Progress of Algorithm 6 (extrapolation, stall detection, the best plane kept) is judged
 # by this quantile of the residuals. The median is an outlier's residual once outliers are
@@ -85,6 +85,49 @@ def support(points, index, normal, offset, sigma: float):
     median residual."""
     d, _ = index.query(reflect_points(points, normal, offset))
     return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
+
+
+def kernel_score(points, index, normal, offset, width: float, k: int = 8) -> float:
+    """Kernel correlation of a set with its reflection: the mean over points of
+    ``sum_j exp(-|S p_i - p_j|^2 / 2 width^2)`` over the ``k`` nearest ``p_j`` of each
+    reflected point (Tsin and Kanade's kernel correlation, truncated to ``k`` neighbours).
+
+    On a noisy symmetric set every noisy mirror point lies within a few ``width`` of the
+    reflected point, rarely nearest to it, so a nearest-neighbour residual compares each
+    point with an arbitrary neighbour while the kernel sums over all of them.
+    """
+    d, _ = index.query(reflect_points(points, normal, offset), k=k)  # (N, k)
+    return float(torch.exp(-0.5 * (d / width) ** 2).sum(1).mean())
+
+
+def kernel_refine(points, index, normal, offset, width: float, *, k: int = 8, max_iter: int = 15, tol_angle: float = 0.01):
+    """Maximise :func:`kernel_score` from ``(normal, offset)`` by reweighted least squares.
+
+    Each step pairs every point with the ``k`` nearest points to its reflection, weighted
+    by ``exp(-d^2 / 2 width^2)``, and fits the least-squares reflection to the weighted
+    pairs (:func:`~torchsym.geometry.reflection.plane_from_pairs`, Eq. 5.6): an EM step
+    for a Gaussian mixture centred on the reflected points, i.e. soft-assignment ICP
+    (as in coherent point drift) for the symmetric case. Stops when the normal moves
+    less than ``tol_angle`` degrees.
+
+    Returns:
+        ``(normal, offset, steps)``.
+    """
+    it = 0
+    for it in range(1, max_iter + 1):
+        d, j = index.query(reflect_points(points, normal, offset), k=k)  # (N, k)
+        w = torch.exp(-0.5 * (d / width) ** 2).reshape(-1)  # (N k,)
+        if not bool(w.sum() > 0):
+            break
+        src = points.repeat_interleave(k, dim=0)  # (N k, 3) each point k times
+        new_n, new_b = plane_from_pairs(src, index.points[j.reshape(-1)].to(points.dtype), w.to(points.dtype))
+        if float(new_n @ normal) < 0:
+            new_n, new_b = -new_n, -new_b
+        moved = math.degrees(math.acos(min(1.0, abs(float(new_n @ normal)))))
+        normal, offset = new_n, new_b
+        if moved < tol_angle:
+            break
+    return normal, offset, it
 
 
 def _lower_quantile(values: torch.Tensor, q: float) -> torch.Tensor:

@@ -65,7 +65,14 @@ from torchsym.geometry.reflection import (
     reflection_transform,
 )
 from torchsym.matching.knn import KNNIndex, mutual_nearest
-from torchsym.pointcloud.alignment import alternate, point_normals, pre_align, support
+from torchsym.pointcloud.alignment import (
+    alternate,
+    kernel_refine,
+    kernel_score,
+    point_normals,
+    pre_align,
+    support,
+)
 from torchsym.pointcloud.candidates import (
     initial_normals,
     score_normals,
@@ -99,6 +106,17 @@ DOMINANCE_GAP = 0.05
 # outliers reach as well (at 200 % outliers F fell from 0.88 to 0.82 without the floor).
 REFERENCE_FLOOR = 0.5
 DOMINANCE_AFTER = 6
+# The kernel stage (after the polish) runs when fewer than KERNEL_TRIGGER of the points
+# have a mirror within KERNEL_EXACT of the inlier tolerance: an exactly symmetric cloud
+# (and its inliers among outliers: a third of the points at 200 % outliers) has such exact
+# pairs; a perturbed cloud has about 1 % (thesis 5.2.4's perturbation, w = 20 to 200, on
+# the benchmark's clouds). Kernel width: KERNEL_WIDTH times the median nearest-neighbour
+# residual at the polished plane; KERNEL_STARTS best-supported starts are refined besides.
+KERNEL_EXACT = 0.05
+KERNEL_TRIGGER = 0.1
+KERNEL_WIDTH = 2.0
+KERNEL_STARTS = 8
+KERNEL_POLISH_ITER = 100
 
 __all__ = ["ReflectionPlaneDetector", "ReflectionPlaneResult", "detect_reflection_plane", "sphere_normals"]
 
@@ -181,7 +199,7 @@ def _check_settings(**s: Any) -> dict[str, Any]:
         raise InputValueError(f"init: expected 'sphere' or 'grid', got {s['init']!r}")
     if s["update"] not in ("reflection", "procrustes"):
         raise InputValueError(f"update: expected 'reflection' or 'procrustes', got {s['update']!r}")
-    for name in ("polish", "accelerate", "pca_starts", "coarse"):
+    for name in ("polish", "accelerate", "pca_starts", "coarse", "kernel_stage"):
         if not isinstance(s[name], bool):
             raise InputValueError(f"{name}: expected True or False, got {s[name]!r}")
     return out
@@ -248,6 +266,7 @@ def detect_reflection_plane(
     coarse_iter: int = 8,
     accept: float = 0.95,
     inlier_factor: float = 2.0,
+    kernel_stage: bool = True,
     generator: torch.Generator | int | None = None,
 ) -> ReflectionPlaneResult:
     """Detect the global reflection plane of a 3D point cloud (thesis Sec. 5.2).
@@ -303,6 +322,19 @@ def detect_reflection_plane(
             each point's distance to its nearest other point.
         inlier_factor: a point is an inlier when its mirror image is within this many
             median point spacings of the cloud.
+        kernel_stage: after the polish, when fewer than 10 % of the points have an exact
+            mirror (within 5 % of the inlier tolerance; see ``KERNEL_TRIGGER``), refine the
+            polished plane, the three principal axes and the 8 best-supported starts by
+            maximising the kernel correlation of the cloud with its reflection
+            (:func:`~torchsym.pointcloud.alignment.kernel_refine`, width twice the median
+            nearest-neighbour residual), and keep the highest-scoring plane, refined to
+            convergence (an extension). Under the thesis's perturbation (Sec. 5.2.4) a point's
+            mirror is rarely its reflection's nearest neighbour, and the nearest-neighbour
+            pairs of Algorithm 6 fit noise; the kernel weighs every neighbour. On the
+            benchmark's clouds at w = 50, F went from 0.18 to 0.44 (PCA + ICP: 0.24) and
+            with isotropic noise from 0.62 to 0.79; exactly symmetric clouds, with or
+            without outliers, never trigger it. Costs about 0.25 s on a perturbed
+            1,000-point cloud.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
@@ -329,6 +361,7 @@ def detect_reflection_plane(
         n_polish_samples=n_polish_samples, update=update, max_iter=max_iter, tol_angle=tol_angle,
         tol_offset=tol_offset, polish=polish, accelerate=accelerate, pca_starts=pca_starts, coarse=coarse,
         coarse_tol=coarse_tol, coarse_iter=coarse_iter, accept=accept, inlier_factor=inlier_factor,
+        kernel_stage=kernel_stage,
     )
     gen = make_generator(generator)
     # float64 inside: float32 BLAS reductions can differ in the last bit between calls
@@ -508,6 +541,25 @@ def detect_reflection_plane(
     if full_spacing is None:
         full_spacing = _spacing(xs, full_index, gen)
     tol = inlier_factor * max(full_spacing, 1e-12)
+    t_kernel = time.perf_counter()
+    if kernel_stage and float((dist < KERNEL_EXACT * tol).double().mean()) < KERNEL_TRIGGER:
+        # No exact mirror pairs: noise (or a wrong plane). Nearest neighbours then pair each
+        # point with an arbitrary neighbour of its noisy mirror; the kernel correlation
+        # weighs them all (see KERNEL_TRIGGER).
+        width = KERNEL_WIDTH * float(dist.median())
+        if width > 0:
+            ranked = [(nk, bk) for _, nk, bk, _ in sorted(aligned, key=lambda a: -a[0])[:KERNEL_STARTS]]
+            chosen = None
+            for nk, bk in [(normal, offset), *pca, *ranked]:
+                nk, bk, _ = kernel_refine(sub, sub_index, nk, bk, width)
+                value = kernel_score(sub, sub_index, nk, bk, width)
+                if chosen is None or value > chosen[0]:
+                    chosen = (value, nk, bk)
+            # the soft assignment converges slowly (about 50 steps from 8 degrees away): the
+            # winner only is followed to convergence
+            normal, offset, _ = kernel_refine(sub, sub_index, chosen[1], chosen[2], width, max_iter=KERNEL_POLISH_ITER)
+            dist, nn_idx = full_index.query(reflect_points(xs, normal, offset))
+    t_kernel = time.perf_counter() - t_kernel
     inliers = dist <= tol
     mutual = mutual_nearest(nn_idx, nn_idx)
     idx = torch.arange(n, device=nn_idx.device)
@@ -547,7 +599,8 @@ def detect_reflection_plane(
         timings={
             "init": t_init - t0,
             "refine": t_refine - t_init,
-            "polish": t_end - t_refine,
+            "polish": t_end - t_refine - t_kernel,
+            "kernel": t_kernel,
             "total": t_end - t0,
         },
     )
@@ -585,6 +638,7 @@ class ReflectionPlaneDetector(nn.Module):
         coarse_iter: int = 8,
         accept: float = 0.95,
         inlier_factor: float = 2.0,
+        kernel_stage: bool = True,
         seed: int = 0,
     ) -> None:
         super().__init__()
@@ -594,6 +648,7 @@ class ReflectionPlaneDetector(nn.Module):
             n_refine_samples=n_refine_samples, n_polish_samples=n_polish_samples, update=update, max_iter=max_iter,
             tol_angle=tol_angle, tol_offset=tol_offset, polish=polish, accelerate=accelerate, pca_starts=pca_starts,
             coarse=coarse, coarse_tol=coarse_tol, coarse_iter=coarse_iter, accept=accept, inlier_factor=inlier_factor,
+            kernel_stage=kernel_stage,
         )
         self.seed = check_int(seed, "seed", minimum=0)
 
