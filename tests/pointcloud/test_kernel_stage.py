@@ -1,5 +1,6 @@
 """The kernel-correlation stage of the reflection plane detector, for perturbed clouds."""
 
+import itertools
 import math
 
 import pytest
@@ -13,7 +14,7 @@ from torchsym.pointcloud import (
     perturb,
     planted_symmetric_cloud,
 )
-from torchsym.pointcloud.alignment import kernel_refine, kernel_score
+from torchsym.pointcloud.alignment import kernel_refine, kernel_score, surface_variation
 
 
 def _turned(normal: torch.Tensor, degrees: float) -> torch.Tensor:
@@ -70,6 +71,46 @@ class TestKernelStage:
                 res = detect_reflection_plane(noisy, kernel_stage=stage)
                 right[stage] += float(plane_angle(res.normal, cloud.normal)) < 0.2  # radians, about 11 deg
         assert right[True] >= 5 and right[False] <= right[True] - 2
+
+    def test_independently_sampled_surface_skips_it(self):
+        """An ellipsoid sampled at random (no exact mirror pairs) is a thin surface: no kernel stage."""
+        g = torch.Generator().manual_seed(4)
+        u = torch.randn(3000, 3, generator=g, dtype=torch.float64)
+        pts = u / u.norm(dim=1, keepdim=True) * torch.tensor([3.0, 2.0, 1.0], dtype=torch.float64)
+        res = detect_reflection_plane(pts)
+        assert res.timings["kernel"] == 0.0
+        assert surface_variation(pts, KNNIndex(pts)) < 0.1
+        noisy = pts + 0.3 * torch.randn(3000, 3, generator=g, dtype=torch.float64)
+        assert surface_variation(noisy, KNNIndex(noisy)) > 0.1
+
+    @pytest.mark.parametrize("n", [6, 7])
+    def test_tiny_clouds(self, n):
+        """Fewer points than the kernel's 8 neighbours: no crash."""
+        for seed in (6017, 7002, 7009):
+            pts = torch.randn(n, 3, generator=torch.Generator().manual_seed(seed), dtype=torch.float64)
+            res = detect_reflection_plane(pts)
+            assert torch.isfinite(res.normal).all()
+
+    def test_result_describes_the_returned_plane(self):
+        """After the stage, residual and inliers come from the returned plane, and the score rose step by step."""
+        cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
+        noisy = perturb(cloud, 50, generator=100).points
+        res = detect_reflection_plane(noisy)
+        assert res.timings["kernel"] > 0
+        d, _ = KNNIndex(noisy).query(reflect_points(noisy, res.normal, res.offset))
+        assert res.residual == pytest.approx(float(d.median()), rel=1e-6)
+        assert torch.equal(res.inliers, d <= res.tolerance)
+        index = KNNIndex(noisy)
+        n, b = res.normal, res.offset
+        start = _turned(n, 6.0)
+        n, b = start, -(start @ noisy.mean(0))
+        width = 2.0 * float(d.median())
+        scores = [kernel_score(noisy, index, n, b, width)]
+        for _ in range(5):
+            n, b, steps = kernel_refine(noisy, index, n, b, width, max_iter=1)
+            assert steps == 1
+            scores.append(kernel_score(noisy, index, n, b, width))
+        assert all(later >= earlier - 1e-9 for earlier, later in itertools.pairwise(scores)) and scores[-1] > scores[0]
 
     def test_setting_is_checked(self):
         with pytest.raises(InputValueError, match="kernel_stage"):
