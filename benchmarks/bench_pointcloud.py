@@ -22,6 +22,9 @@ Methods, side by side in one run:
   determinant -1, which admits rotoreflections, instead of the symmetric S = I - 2 n n^T)
   and ``one start`` (``n_starts=1, pca_starts=False``: only the best-scored initial
   normal is refined, as the thesis refines its best grid cell);
+* ``kernel stage``: the defaults with ``kernel_stage=True`` (an option for noisy scans:
+  on perturbed clouds the plane is refined by kernel correlation; see
+  :func:`torchsym.pointcloud.detect_reflection_plane`);
 * ``pca+icp``: the baseline users pick today (Cicconet et al.): reflect the cloud about
   each of its three PCA planes, register it back with Open3D's point-to-point ICP, and
   keep the best-fitting one (needs ``pip install open3d``; skipped if absent);
@@ -165,6 +168,7 @@ def main(argv=None) -> int:
         "thesis": run_torchsym(build_pipeline(ROOT / "configs" / "pointcloud_plane_thesis.yaml").steps[0]),
         "procrustes S": run_torchsym(torchsym.ReflectionPlaneDetector(update="procrustes")),
         "one start": run_torchsym(torchsym.ReflectionPlaneDetector(n_starts=1, pca_starts=False)),
+        "kernel stage": run_torchsym(torchsym.ReflectionPlaneDetector(kernel_stage=True)),
     }
     try:
         import open3d  # noqa: F401

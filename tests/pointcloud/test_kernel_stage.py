@@ -57,7 +57,7 @@ class TestKernelStage:
     def test_clean_cloud_skips_it(self):
         """Exact mirror pairs: the stage does not run, and the result equals the one without it."""
         cloud = planted_symmetric_cloud(1000, generator=0)
-        on, off = detect_reflection_plane(cloud.points), detect_reflection_plane(cloud.points, kernel_stage=False)
+        on, off = detect_reflection_plane(cloud.points, kernel_stage=True), detect_reflection_plane(cloud.points)
         assert torch.equal(on.normal, off.normal) and torch.equal(on.offset, off.offset)
         assert on.timings["kernel"] < 0.01
 
@@ -77,7 +77,7 @@ class TestKernelStage:
         g = torch.Generator().manual_seed(4)
         u = torch.randn(3000, 3, generator=g, dtype=torch.float64)
         pts = u / u.norm(dim=1, keepdim=True) * torch.tensor([3.0, 2.0, 1.0], dtype=torch.float64)
-        res = detect_reflection_plane(pts)
+        res = detect_reflection_plane(pts, kernel_stage=True)
         assert res.timings["kernel"] == 0.0
         assert surface_variation(pts, KNNIndex(pts)) < 0.1
         noisy = pts + 0.3 * torch.randn(3000, 3, generator=g, dtype=torch.float64)
@@ -88,15 +88,15 @@ class TestKernelStage:
         """Fewer points than the kernel's 8 neighbours: no crash."""
         for seed in (6017, 7002, 7009):
             pts = torch.randn(n, 3, generator=torch.Generator().manual_seed(seed), dtype=torch.float64)
-            res = detect_reflection_plane(pts)
+            res = detect_reflection_plane(pts, kernel_stage=True)
             assert torch.isfinite(res.normal).all()
 
     def test_result_describes_the_returned_plane(self):
         """After the stage, residual and inliers come from the returned plane, and the score rose step by step."""
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = perturb(cloud, 50, generator=100).points
-        res = detect_reflection_plane(noisy)
-        assert res.timings["kernel"] > 0
+        res = detect_reflection_plane(noisy, kernel_stage=True)
+        assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy).timings["kernel"] == 0.0  # off by default
         d, _ = KNNIndex(noisy).query(reflect_points(noisy, res.normal, res.offset))
         assert res.residual == pytest.approx(float(d.median()), rel=1e-6)
         assert torch.equal(res.inliers, d <= res.tolerance)
