@@ -360,9 +360,10 @@ def detect_reflection_plane(
             Costs about 0.3 s on a perturbed 1,000-point cloud. Off by default: with
             outliers on a cloud without exact mirror pairs the trigger can still fire
             (the sparse-point test misses some outlier clouds) and the kernel then
-            rewards the outlier box's own planes: with the Procrustes update, one of
-            three planted clouds at 200 % outliers took 1.8 s and the stage replaced
-            its plane.
+            rewards the outlier box's own planes: with the Procrustes update, the
+            stage still ran (1.8 s) on one of three planted clouds at 200 % outliers,
+            and before the sparse-point test it cut that ablation's F at 200 %
+            outliers on the benchmark from 0.91 to 0.59.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
