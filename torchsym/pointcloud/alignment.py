@@ -19,7 +19,16 @@ from torchsym.geometry.reflection import (
 )
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 
-__all__ = ["alternate", "kernel_refine", "kernel_score", "point_normals", "pre_align", "support", "surface_variation"]
+__all__ = [
+    "alternate",
+    "kernel_refine",
+    "kernel_score",
+    "local_pca",
+    "point_normals",
+    "pre_align",
+    "support",
+    "surface_variation",
+]
 
 # Progress of Algorithm 6 (extrapolation, stall detection, the best plane kept) is judged
 # by this quantile of the residuals. The median is an outlier's residual once outliers are
@@ -28,13 +37,18 @@ __all__ = ["alternate", "kernel_refine", "kernel_score", "point_normals", "pre_a
 PROGRESS_QUANTILE = 0.25
 
 
-def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
-    """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
+def local_pca(points: torch.Tensor, index: KNNIndex, k: int = 10) -> tuple[torch.Tensor, torch.Tensor]:
+    """Eigenvalues ``(N, 3)`` (ascending) and eigenvectors ``(N, 3, 3)`` (columns) of the
+    scatter matrix of each point's ``k`` nearest neighbours."""
     _, j = index.query(points, k=min(k, points.shape[0]))
     nb = points[j]  # (N, k, 3)
     nb = nb - nb.mean(1, keepdim=True)
-    _, vecs = torch.linalg.eigh(nb.transpose(1, 2) @ nb)
-    return vecs[:, :, 0]
+    return torch.linalg.eigh(nb.transpose(1, 2) @ nb)
+
+
+def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
+    """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
+    return local_pca(points, index, k)[1][:, :, 0]
 
 
 def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
@@ -87,14 +101,15 @@ def support(points, index, normal, offset, sigma: float):
     return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
 
 
-def surface_variation(points: torch.Tensor, index: KNNIndex, k: int = 10) -> float:
+def surface_variation(
+    points: torch.Tensor, index: KNNIndex, k: int = 10, *, eigenvalues: torch.Tensor | None = None
+) -> float:
     """Median over points of ``l_min / (l_1 + l_2 + l_3)``, the eigenvalues of the covariance
     of each point's ``k`` nearest neighbours (Pauly et al.'s surface variation): near 0 on a
     sampled surface, about 0.13 once noise thickens it into a shell (thesis 5.2.4's
-    perturbation from w = 20 on the benchmark's clouds; clean clouds there 0.005 to 0.08)."""
-    _, j = index.query(points, k=min(k, points.shape[0]))
-    nb = points[j] - points[j].mean(1, keepdim=True)  # (N, k, 3)
-    lam = torch.linalg.eigvalsh(nb.transpose(1, 2) @ nb)  # (N, 3) ascending
+    perturbation from w = 20 on the benchmark's clouds; clean clouds there 0.005 to 0.08).
+    ``eigenvalues``: those of :func:`local_pca`, when already computed."""
+    lam = eigenvalues if eigenvalues is not None else local_pca(points, index, k)[0]  # (N, 3) ascending
     return float((lam[:, 0] / lam.sum(1).clamp_min(torch.finfo(lam.dtype).tiny)).median())
 
 

@@ -76,7 +76,7 @@ from torchsym.pointcloud.alignment import (
     alternate,
     kernel_refine,
     kernel_score,
-    point_normals,
+    local_pca,
     pre_align,
     support,
     surface_variation,
@@ -124,9 +124,9 @@ DOMINANCE_AFTER = 6
 # there the stage only cost time. Nor does it run when a share of sparse points marks
 # outliers (SPARSE_MIN_SHARE): uniform outliers in a box are symmetric about the box's
 # planes, and the kernel rewards those (with the Procrustes update, whose planes have no
-# exact pairs, F at 200 % outliers fell from 0.91 to 0.59 before this rule). Kernel width: KERNEL_WIDTH times the median
-# nearest-neighbour residual of the subsample at the polished plane; up to KERNEL_STARTS
-# best-supported starts are refined besides.
+# exact pairs, F at 200 % outliers fell from 0.91 to 0.59 before this rule). Kernel
+# width: KERNEL_WIDTH times the median nearest-neighbour residual of the subsample at the
+# polished plane; up to KERNEL_STARTS best-supported starts are refined besides.
 KERNEL_EXACT = 0.05
 KERNEL_TRIGGER = 0.1
 KERNEL_VARIATION = 0.1
@@ -338,32 +338,33 @@ def detect_reflection_plane(
             each point's distance to its nearest other point.
         inlier_factor: a point is an inlier when its mirror image is within this many
             median point spacings of the cloud.
-        kernel_stage: (off by default; for noisy scans) after the polish, when fewer
-            than 10 % of the points have an exact
-            mirror (within 5 % of the inlier tolerance) and noise has thickened the surface
-            (:func:`~torchsym.pointcloud.alignment.surface_variation` above 0.1; see
-            ``KERNEL_TRIGGER``), refine the polished plane, the principal axes (with
-            ``pca_starts``) and up to 8 best-supported starts by maximising the kernel
-            correlation of the cloud with its reflection on the subsample
+        kernel_stage: (an extension, off by default; for noisy scans) after the polish,
+            when fewer than 10 % of the points have an exact mirror (within 5 % of the
+            inlier tolerance), noise has thickened the surface
+            (:func:`~torchsym.pointcloud.alignment.surface_variation` above 0.1) and no
+            share of sparse points marks outliers (see ``KERNEL_TRIGGER``), refine the
+            polished plane, the principal axes (with ``pca_starts``) and up to 8
+            best-supported starts by maximising the kernel correlation of the cloud with
+            its reflection on the subsample
             (:func:`~torchsym.pointcloud.alignment.kernel_refine`, width twice the
             subsample's median nearest-neighbour residual), and keep the highest-scoring
-            plane, refined to convergence (an extension). Under the thesis's perturbation (Sec. 5.2.4) a point's
-            mirror is rarely its reflection's nearest neighbour, and the nearest-neighbour
-            pairs of Algorithm 6 fit noise; the kernel weighs every neighbour. On the
-            benchmark's clouds at w = 50, F went from 0.18 to 0.44 (PCA + ICP: 0.24) and
-            with isotropic noise from 0.62 to 0.79; mirror-paired clouds, with or
-            without outliers, and clean surfaces sampled independently on each side do
-            not trigger it. At w >= 100, where no method finds the
-            plane within 5 degrees, the thesis's curve over thresholds went from 0.18 to
-            0.21 at w = 100 and from 0.38 to 0.21 at w = 200 (PCA + ICP: 0.24 at both):
-            there the kernel favours the symmetries of the blurred shape's principal axes.
-            Costs about 0.3 s on a perturbed 1,000-point cloud. Off by default: with
-            outliers on a cloud without exact mirror pairs the trigger can still fire
-            (the sparse-point test misses some outlier clouds) and the kernel then
-            rewards the outlier box's own planes: with the Procrustes update, the
-            stage still ran (1.8 s) on one of three planted clouds at 200 % outliers,
-            and before the sparse-point test it cut that ablation's F at 200 %
-            outliers on the benchmark from 0.91 to 0.59.
+            plane, refined to convergence. Under the thesis's perturbation (Sec. 5.2.4)
+            a point's mirror is rarely its reflection's nearest neighbour, and the
+            nearest-neighbour pairs of Algorithm 6 fit noise; the kernel weighs every
+            neighbour. On the benchmark's clouds at w = 50, F went from 0.18 to 0.44
+            (PCA + ICP: 0.24) and with isotropic noise from 0.62 to 0.79;
+            mirror-paired clouds, with or without outliers, and clean surfaces sampled
+            independently on each side do not trigger it. At w >= 100, where no method
+            finds the plane within 5 degrees, the thesis's curve over thresholds went
+            from 0.18 to 0.21 at w = 100 and from 0.38 to 0.21 at w = 200 (PCA + ICP:
+            0.24 at both): there the kernel favours the symmetries of the blurred
+            shape's principal axes. Costs about 0.3 s on a perturbed 1,000-point cloud.
+            Off by default: with outliers on a cloud without exact mirror pairs the
+            trigger can still fire (the sparse-point test misses some outlier clouds)
+            and the kernel then rewards the outlier box's own planes: with the
+            Procrustes update, the stage still ran (1.8 s) on one of three planted
+            clouds at 200 % outliers, and before the sparse-point test it cut that
+            ablation's F at 200 % outliers on the benchmark from 0.91 to 0.59.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
@@ -480,7 +481,10 @@ def detect_reflection_plane(
     else:
         d_ref = sub_index.query(sub[random_subset(n, 1000, gen)], k=2)[0][:, 1]
     reference = max(float(torch.exp(-0.5 * (d_ref / sub_tol) ** 2).mean()), REFERENCE_FLOOR)
-    sub_normals = point_normals(sub, sub_index) if coarse else None
+    # local PCA once: the normals for the point-to-plane steps, the eigenvalues for the
+    # kernel stage's thickness test
+    sub_pca = local_pca(sub, sub_index) if coarse else None
+    sub_normals = sub_pca[1][:, :, 0] if sub_pca is not None else None
     align_q = sub[random_subset(sub.shape[0], 1000, gen)] if sub.shape[0] > 1000 else sub
     best = None
     iters = 0
@@ -575,7 +579,7 @@ def detect_reflection_plane(
         kernel_stage
         and sparse < SPARSE_MIN_SHARE
         and float((dist < KERNEL_EXACT * tol).double().mean()) < KERNEL_TRIGGER
-        and surface_variation(sub, sub_index) > KERNEL_VARIATION
+        and surface_variation(sub, sub_index, eigenvalues=None if sub_pca is None else sub_pca[0]) > KERNEL_VARIATION
     ):
         # No exact mirror pairs and a surface thickened by noise. Nearest neighbours then
         # pair each point with an arbitrary neighbour of its noisy mirror; the kernel
