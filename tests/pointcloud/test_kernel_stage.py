@@ -10,11 +10,13 @@ from torchsym.errors import InputValueError
 from torchsym.geometry import plane_angle, reflect_points
 from torchsym.matching import KNNIndex
 from torchsym.pointcloud import (
+    add_outliers,
     detect_reflection_plane,
     perturb,
     planted_symmetric_cloud,
 )
 from torchsym.pointcloud.alignment import kernel_refine, kernel_score, surface_variation
+from torchsym.pointcloud.reflection_plane import _dense_part
 
 
 def _turned(normal: torch.Tensor, degrees: float) -> torch.Tensor:
@@ -96,7 +98,7 @@ class TestKernelStage:
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = perturb(cloud, 50, generator=100).points
         res = detect_reflection_plane(noisy, kernel_stage=True)
-        assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy).timings["kernel"] == 0.0  # off by default
+        assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy, kernel_stage=False).timings["kernel"] == 0.0
         d, _ = KNNIndex(noisy).query(reflect_points(noisy, res.normal, res.offset))
         assert res.residual == pytest.approx(float(d.median()), rel=1e-6)
         assert torch.equal(res.inliers, d <= res.tolerance)
@@ -111,6 +113,30 @@ class TestKernelStage:
             assert steps == 1
             scores.append(kernel_score(noisy, index, n, b, width))
         assert all(later >= earlier - 1e-9 for earlier, later in itertools.pairwise(scores)) and scores[-1] > scores[0]
+
+    def test_dense_part_drops_box_outliers(self):
+        """A perturbed cloud with 200 % uniform outliers: its points stay, most outliers go."""
+        cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
+        noisy = add_outliers(perturb(cloud, 20, generator=100), 200, generator=200).points
+        kept, index = _dense_part(noisy, KNNIndex(noisy))
+        from_cloud = torch.cdist(kept, noisy).argmin(1) < 1000  # the first 1,000 are the cloud's
+        assert int(from_cloud.sum()) >= 990 and int((~from_cloud).sum()) <= 400
+        assert index.points.shape == kept.shape
+        clean, _ = _dense_part(cloud.points, KNNIndex(cloud.points))
+        assert clean.shape[0] >= 950  # a sampled surface is (nearly) all dense
+
+    def test_perturbed_clouds_with_outliers(self):
+        """w = 20 and 200 % outliers: the stage, on the dense part, finds 4 of 4 planes within
+        3 degrees; Algorithm 6's nearest-neighbour pairs alone 1 (on the whole cloud the
+        kernel rewarded the outlier box's planes)."""
+        right = {True: 0, False: 0}
+        for seed in range(1, 5):
+            cloud = planted_symmetric_cloud(1000, generator=seed)
+            noisy = add_outliers(perturb(cloud, 20, generator=100 + seed), 200, generator=200 + seed).points
+            for stage in (True, False):
+                res = detect_reflection_plane(noisy, kernel_stage=stage)
+                right[stage] += math.degrees(float(plane_angle(res.normal, cloud.normal))) < 3.0
+        assert right[True] == 4 and right[False] <= 2
 
     def test_setting_is_checked(self):
         with pytest.raises(InputValueError, match="kernel_stage"):
