@@ -2,6 +2,11 @@
 
 Distances run along mesh edges, so they over-estimate the true geodesic distance by a
 few percent; paths are vertex sequences, which is what the sign test of Sec. 6.2.5 needs.
+
+The graphs are symmetric, with both directions of every edge stored
+(:func:`~torchsym.mesh.operators.edge_graph`), so scipy's Dijkstra runs with
+``directed=True``: the same distances, without the transposed copy of the graph that
+``directed=False`` builds on every call.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ def geodesic_distances(
     """Edge-graph distances from each source to every vertex, ``(S, V)``.
 
     Args:
-        graph: ``(V, V)`` edge graph with lengths (:func:`~torchsym.mesh.operators.edge_graph`).
+        graph: ``(V, V)`` symmetric edge graph with lengths (:func:`~torchsym.mesh.operators.edge_graph`).
         sources: ``(S,)`` vertex indices.
         limit: stop searching beyond this distance (entries beyond it are ``inf``).
         chunk: sources per Dijkstra call, to bound memory.
@@ -27,7 +32,7 @@ def geodesic_distances(
     sources = np.asarray(sources, dtype=np.int64).ravel()  # (S,)
     out = np.empty((sources.shape[0], graph.shape[0]))  # (S, V)
     for s in range(0, sources.shape[0], chunk):
-        out[s : s + chunk] = dijkstra(graph, directed=False, indices=sources[s : s + chunk], limit=limit)
+        out[s : s + chunk] = dijkstra(graph, directed=True, indices=sources[s : s + chunk], limit=limit)
     return out
 
 
@@ -35,7 +40,7 @@ def shortest_paths(graph: sp.csr_matrix, pairs: np.ndarray) -> list[np.ndarray]:
     """Vertex sequences of the shortest edge paths between the two ends of each pair.
 
     Args:
-        graph: ``(V, V)`` edge graph with lengths.
+        graph: ``(V, V)`` symmetric edge graph with lengths.
         pairs: ``(P, 2)`` vertex indices ``(start, end)``.
 
     Returns:
@@ -46,7 +51,7 @@ def shortest_paths(graph: sp.csr_matrix, pairs: np.ndarray) -> list[np.ndarray]:
     if pairs.shape[0] == 0:
         return []
     starts, inverse = np.unique(pairs[:, 0], return_inverse=True)
-    _, pred = dijkstra(graph, directed=False, indices=starts, return_predecessors=True)  # (S, V)
+    _, pred = dijkstra(graph, directed=True, indices=starts, return_predecessors=True)  # (S, V)
     paths = []
     for row, end in zip(inverse, pairs[:, 1]):
         start = starts[row]
@@ -66,7 +71,7 @@ def thin_points(graph: sp.csr_matrix, points: np.ndarray, radius: float) -> np.n
     """Keep, in order, each point farther than ``radius`` (edge-graph distance) from every kept one.
 
     Args:
-        graph: ``(V, V)`` edge graph with lengths.
+        graph: ``(V, V)`` symmetric edge graph with lengths.
         points: ``(d,)`` vertex indices, most important first.
         radius: the smallest distance between two kept points; 0 keeps all.
 
