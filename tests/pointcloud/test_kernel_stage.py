@@ -59,7 +59,7 @@ class TestKernelStage:
     def test_clean_cloud_skips_it(self):
         """Exact mirror pairs: the stage does not run, and the result equals the one without it."""
         cloud = planted_symmetric_cloud(1000, generator=0)
-        on, off = detect_reflection_plane(cloud.points, kernel_stage=True), detect_reflection_plane(cloud.points)
+        on, off = detect_reflection_plane(cloud.points), detect_reflection_plane(cloud.points, kernel_stage=False)
         assert torch.equal(on.normal, off.normal) and torch.equal(on.offset, off.offset)
         assert on.timings["kernel"] < 0.01
 
@@ -97,7 +97,7 @@ class TestKernelStage:
         """After the stage, residual and inliers come from the returned plane, and the score rose step by step."""
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = perturb(cloud, 50, generator=100).points
-        res = detect_reflection_plane(noisy, kernel_stage=True)
+        res = detect_reflection_plane(noisy)  # on by default
         assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy, kernel_stage=False).timings["kernel"] == 0.0
         d, _ = KNNIndex(noisy).query(reflect_points(noisy, res.normal, res.offset))
         assert res.residual == pytest.approx(float(d.median()), rel=1e-6)
@@ -124,6 +124,25 @@ class TestKernelStage:
         assert index.points.shape == kept.shape
         clean, _ = _dense_part(cloud.points, KNNIndex(cloud.points))
         assert clean.shape[0] >= 950  # a sampled surface is (nearly) all dense
+
+    def test_dense_part_with_duplicate_stacks(self):
+        """Stacks of exact duplicates (distance 0) do not shrink the dense part to the stacks."""
+        cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
+        noisy = perturb(cloud, 50, generator=100).points
+        stacked = torch.cat([noisy, noisy[:10].repeat(30, 1)])  # 10 points, 31 copies each
+        kept, _ = _dense_part(stacked, KNNIndex(stacked))
+        plain, _ = _dense_part(noisy, KNNIndex(noisy))  # 863 of the 1,000 without the stacks
+        assert torch.unique(kept, dim=0).shape[0] >= 0.95 * plain.shape[0] > 800
+
+    def test_mirror_pairs_among_outliers_skip_it(self):
+        """200 % outliers without noise: the inliers keep exact mirror pairs, so the stage
+        does not run although the outliers make the cloud look thick."""
+        cloud = planted_symmetric_cloud(1000, generator=3)
+        noisy = add_outliers(cloud, 200, generator=5).points
+        index = KNNIndex(noisy.double())
+        assert surface_variation(noisy.double(), index) > 0.1
+        res = detect_reflection_plane(noisy)
+        assert res.timings["kernel"] == 0.0 and math.degrees(float(plane_angle(res.normal, cloud.normal))) < 0.1
 
     def test_perturbed_clouds_with_outliers(self):
         """w = 20 and 200 % outliers: the stage, on the dense part, finds 4 of 4 planes within
