@@ -401,13 +401,13 @@ def detect_reflection_plane(
             it to 0.79. Clean surfaces sampled independently on each side skip it (thin).
             A solid sampled through its volume runs it (no exact pairs, not thin): on a
             clean ellipsoid, 2 to 11x slower, within 1 degree with or without it. At
-            w >= 150 at most 1 of 34 planes is within 5 degrees, for every method, and the
-            figures are near chance (a random plane through the centre is within 45 degrees of the truth
-            on 29 % of clouds): the thesis's curve over thresholds gives 0.24 and 0.38 at
-            w = 150 and 200 (PCA + ICP 0.15 and 0.24; the thesis reports 0.56 at 200),
-            and 0.32 with isotropic noise at w = 200 (PCA + ICP 0.35, one cloud more).
-            It costs about 0.6 s on a perturbed 1,000-point cloud, 2 s with 200 %
-            outliers besides.
+            w >= 150 at most 1 of 34 planes is within 5 degrees, for every method, and
+            the figures are near chance (a random plane through the centre is within 45
+            degrees of the truth on 29 % of clouds): the thesis's curve over thresholds
+            gives 0.24 and 0.38 at w = 150 and 200 (PCA + ICP 0.15 and 0.24; the thesis
+            reports 0.56 at 200), and 0.32 with isotropic noise at w = 200 (PCA + ICP
+            0.35, one cloud more). It costs about 0.6 s on a perturbed 1,000-point cloud,
+            2 s with 200 % outliers besides.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
