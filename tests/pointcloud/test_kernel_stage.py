@@ -40,6 +40,17 @@ class TestKernelRefine:
             n = _turned(cloud.normal, deg)
             assert kernel_score(cloud.points, index, n, -(n @ centre), 0.02) < 0.8 * true
 
+    def test_batched_score_equals_one_by_one(self):
+        cloud = planted_symmetric_cloud(500, generator=1, dtype=torch.float64)
+        noisy = perturb(cloud, 30, isotropic=True, generator=3).points
+        index = KNNIndex(noisy)
+        normals = torch.nn.functional.normalize(torch.randn(5, 3, generator=torch.Generator().manual_seed(0), dtype=torch.float64), dim=1)
+        offsets = -(normals @ noisy.mean(0))
+        batched = kernel_score(noisy, index, normals, offsets, 0.03)
+        assert batched.shape == (5,)
+        for j in range(5):
+            assert float(batched[j]) == kernel_score(noisy, index, normals[j], offsets[j], 0.03)
+
     def test_refine_returns_to_the_plane_under_noise(self):
         cloud = planted_symmetric_cloud(1000, generator=2, dtype=torch.float64)
         noisy = perturb(cloud, 30, isotropic=True, generator=3).points

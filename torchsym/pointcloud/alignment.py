@@ -113,7 +113,7 @@ def surface_variation(
     return float((lam[:, 0] / lam.sum(1).clamp_min(torch.finfo(lam.dtype).tiny)).median())
 
 
-def kernel_score(points, index, normal, offset, width: float, k: int = 8) -> float:
+def kernel_score(points, index, normal, offset, width: float, k: int = 8):
     """Kernel correlation of a set with its reflection: the mean over points of
     ``sum_j exp(-|S p_i - p_j|^2 / 2 width^2)`` over the ``k`` nearest ``p_j`` of each
     reflected point (Tsin and Kanade's kernel correlation, truncated to ``k`` neighbours).
@@ -121,9 +121,15 @@ def kernel_score(points, index, normal, offset, width: float, k: int = 8) -> flo
     On a noisy symmetric set every noisy mirror point lies within a few ``width`` of the
     reflected point, rarely nearest to it, so a nearest-neighbour residual compares each
     point with an arbitrary neighbour while the kernel sums over all of them.
+
+    ``normal (3,)`` and ``offset ()`` give a float; ``normal (K, 3)`` and ``offset (K,)``
+    score ``K`` planes with one neighbour query and give a ``(K,)`` tensor.
     """
-    d, _ = index.query(reflect_points(points, normal, offset), k=min(k, index.points.shape[0]))  # (N, k)
-    return float(torch.exp(-0.5 * (d / width) ** 2).sum(1).mean())
+    moved = reflect_points(points, normal, offset)  # (..., N, 3)
+    k = min(k, index.points.shape[0])
+    d, _ = index.query(moved.reshape(-1, moved.shape[-1]), k=k)  # (... N, k)
+    value = torch.exp(-0.5 * (d.reshape(*moved.shape[:-1], k) / width) ** 2).sum(-1).mean(-1)  # (...)
+    return float(value) if value.dim() == 0 else value
 
 
 def kernel_refine(points, index, normal, offset, width: float, *, k: int = 8, max_iter: int = 15, tol_angle: float = 0.01):
