@@ -157,7 +157,7 @@ def kernel_refine(points, index, normal, offset, width: float, *, k: int = 8, ma
         new_n, new_b = plane_from_pairs(src, index.points[j.reshape(-1)].to(points.dtype), w.to(points.dtype))
         if float(new_n @ normal) < 0:
             new_n, new_b = -new_n, -new_b
-        moved = math.degrees(math.acos(min(1.0, abs(float(new_n @ normal)))))
+        moved = math.degrees(float(plane_angle(new_n, normal)))
         normal, offset = new_n, new_b
         if moved < tol_angle:
             break

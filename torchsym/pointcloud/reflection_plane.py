@@ -267,6 +267,22 @@ def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: flo
     return float(d.quantile(q))
 
 
+def _spread(normals: torch.Tensor, order: torch.Tensor, count: int, min_separation: float) -> list[int]:
+    """Up to ``count`` indices of ``normals (K, 3)``, greedily in ``order``, each more than
+    ``min_separation`` degrees from every one kept (one matrix of ``|cos|``, not a call
+    per pair)."""
+    too_close = (normals @ normals.T).abs() > math.cos(math.radians(min_separation))  # (K, K)
+    blocked = torch.zeros(normals.shape[0], dtype=torch.bool, device=normals.device)
+    out: list[int] = []
+    for k in order.tolist():
+        if len(out) == count:
+            break
+        if not bool(blocked[k]):
+            out.append(k)
+            blocked |= too_close[k]
+    return out
+
+
 def _dense_part(points: torch.Tensor, index: KNNIndex) -> tuple[torch.Tensor, KNNIndex]:
     """The points of the sampled surface with most scattered points left out, and their index.
 
@@ -497,17 +513,7 @@ def detect_reflection_plane(
             sample, sub_index, init=init, n_directions=n_directions, grid_step=grid_step, beam=beam,
             spacing=spacing, dtype=dtype,
         )
-        # greedy in rank order; one matrix of |cos| between candidates, not a call per pair
-        too_close = (cand @ cand.T).abs() > math.cos(math.radians(min_start_separation))  # (K, K)
-        blocked = torch.zeros(cand.shape[0], dtype=torch.bool, device=cand.device)
-        out: list[tuple[torch.Tensor, torch.Tensor]] = []
-        for k in order.tolist():
-            if len(out) == n_starts:
-                break
-            if not bool(blocked[k]):
-                out.append((cand[k], b_cand[k]))
-                blocked |= too_close[k]
-        return out
+        return [(cand[k], b_cand[k]) for k in _spread(cand, order, n_starts, min_start_separation)]
 
     t_init = time.perf_counter()
 
@@ -638,12 +644,8 @@ def detect_reflection_plane(
             centroid = kpts.mean(0)
             cand = sphere_normals(n_directions, dtype=kpts.dtype).to(kpts.device)
             values = kernel_score(kpts, kindex, cand, -(cand @ centroid), width)  # (n_directions,)
-            scan: list[tuple[torch.Tensor, torch.Tensor]] = []
-            for j in values.argsort(descending=True).tolist():
-                if len(scan) == KERNEL_SCAN_STARTS:
-                    break
-                if all(abs(float(cand[j] @ c)) < math.cos(math.radians(min_start_separation)) for c, _ in scan):
-                    scan.append((cand[j], -(cand[j] @ centroid)))
+            best = _spread(cand, values.argsort(descending=True), KERNEL_SCAN_STARTS, min_start_separation)
+            scan = [(cand[j], -(cand[j] @ centroid)) for j in best]
             chosen = None
             for nk, bk in [(normal, offset), *pca, *ranked, *scan]:
                 nk, bk, _ = kernel_refine(kpts, kindex, nk, bk, width)
