@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from torchsym.core.results import Result
+from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = [
     "AxisEvidence",
@@ -331,7 +332,6 @@ def gradient_noise(gx: np.ndarray, gy: np.ndarray) -> float:
     synthetic benchmark images the background's smoothed noise peaks at about twice the
     median, while object edges are ten times it and more.
     """
-    from torchsym.errors import InputShapeError
 
     gx, gy = np.asarray(gx), np.asarray(gy)
     if gx.shape != gy.shape:
@@ -528,7 +528,6 @@ def axis_evidence(
             setting out of range.
     """
     from torchsym.core.checks import check_in_range, check_int, check_positive
-    from torchsym.errors import InputShapeError, InputValueError
 
     gx, gy = np.asarray(gx), np.asarray(gy)
     if gx.ndim != 2 or gy.shape != gx.shape:
@@ -712,7 +711,6 @@ def support_runs(line: Any, pairs: np.ndarray, members: np.ndarray, gap: float) 
         Index arrays (into ``pairs``), one per run, in order along the line.
     """
     from torchsym.core.checks import check_positive
-    from torchsym.errors import InputShapeError, InputValueError
 
     pairs = np.asarray(pairs, dtype=np.float64)
     if pairs.ndim != 2 or pairs.shape[1] != 4:
@@ -762,7 +760,6 @@ def suppress_duplicates(
         Kept indices, best score first.
     """
     from torchsym.core.checks import check_in_range, check_positive
-    from torchsym.errors import InputShapeError
 
     if not len(lines) == len(extents) == len(scores):
         raise InputShapeError(f"lines, extents, scores: expected one of each per axis, got {len(lines)}, {len(extents)}, {len(scores)}")

@@ -422,8 +422,8 @@ def detect_reflection_plane(
             degrees of the truth on 29 % of clouds): the thesis's curve over thresholds
             gives 0.24 and 0.38 at w = 150 and 200 (PCA + ICP 0.15 and 0.24; the thesis
             reports 0.56 at 200), and 0.32 with isotropic noise at w = 200 (PCA + ICP
-            0.35, one cloud more). It costs about 0.5 s on a perturbed 1,000-point cloud,
-            1.8 s with 200 % outliers besides (medians at w = 50 and w = 20 + 200 %).
+            0.35, one cloud more). It costs about 0.45 to 0.6 s on a perturbed 1,000-point
+            cloud, 1.7 s with 200 % outliers besides (benchmark medians per level).
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
