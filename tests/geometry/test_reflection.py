@@ -16,6 +16,7 @@ from torchsym.geometry import (
     reflection_matrix,
     reflection_matrix_from_angles,
     reflection_transform,
+    spread_normals,
 )
 
 
@@ -185,3 +186,17 @@ class TestTangentBasis:
 
         with pytest.raises(InputShapeError, match=r"normal: expected \(\.\.\., 3\), got \(2,\)"):
             tangent_basis(torch.ones(2))
+
+
+class TestSpreadNormals:
+    def test_greedy_separation(self):
+        normals = torch.tensor(
+            [[1.0, 0.0, 0.0], [-0.999, 0.0447, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.1, 0.995, 0.0]],
+            dtype=torch.float64,
+        )
+        normals = normals / normals.norm(dim=1, keepdim=True)
+        order = torch.tensor([1, 0, 4, 2, 3])
+        # 0 is a near-copy of 1 (n and -n are one plane, 2.6 deg apart), 2 of 4 (5.7 deg)
+        assert spread_normals(normals, order, 5, 10.0) == [1, 4, 3]
+        assert spread_normals(normals, order, 2, 10.0) == [1, 4]
+        assert spread_normals(normals, order, 5, 1.0) == [1, 0, 4, 2, 3]

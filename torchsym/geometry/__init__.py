@@ -13,6 +13,7 @@ from torchsym.geometry.reflection import (
     reflection_matrix,
     reflection_matrix_from_angles,
     reflection_transform,
+    spread_normals,
     tangent_basis,
 )
 
@@ -29,5 +30,6 @@ __all__ = [
     "reflection_matrix",
     "reflection_matrix_from_angles",
     "reflection_transform",
+    "spread_normals",
     "tangent_basis",
 ]

@@ -12,6 +12,8 @@ and :func:`normal_to_angles` convert between that parametrisation and the normal
 
 from __future__ import annotations
 
+import math
+
 import torch
 
 from torchsym.errors import InputShapeError, InputValueError
@@ -29,6 +31,7 @@ __all__ = [
     "reflection_matrix",
     "reflection_matrix_from_angles",
     "reflection_transform",
+    "spread_normals",
     "tangent_basis",
 ]
 
@@ -261,6 +264,23 @@ def plane_angle(normal_a: torch.Tensor, normal_b: torch.Tensor, *, oriented: boo
         cos = cos * sign
     sin = (a - cos.unsqueeze(-1) * b).norm(dim=-1)
     return torch.atan2(sin, cos)
+
+
+def spread_normals(normals: torch.Tensor, order: torch.Tensor, count: int, min_separation: float) -> list[int]:
+    """Up to ``count`` indices of ``normals (K, D)``, taken greedily in ``order``, each more
+    than ``min_separation`` degrees (as planes: ``n`` and ``-n`` are one) from every index
+    already kept; one matrix of ``|cos|``, not a call per pair. Used to keep several
+    starting planes that are not near-copies of one another."""
+    too_close = (normals @ normals.T).abs() > math.cos(math.radians(min_separation))  # (K, K)
+    blocked = torch.zeros(normals.shape[0], dtype=torch.bool, device=normals.device)
+    out: list[int] = []
+    for k in order.tolist():
+        if len(out) == count:
+            break
+        if not bool(blocked[k]):
+            out.append(k)
+            blocked |= too_close[k]
+    return out
 
 
 def plane_distance(

@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -71,6 +70,7 @@ from torchsym.geometry.reflection import (
     reflect_points,
     reflection_matrix,
     reflection_transform,
+    spread_normals,
 )
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 from torchsym.pointcloud.alignment import (
@@ -265,22 +265,6 @@ def _spacing(points: torch.Tensor, index: KNNIndex, gen: torch.Generator, q: flo
     if isinstance(q, tuple):
         return tuple(float(v) for v in d.quantile(torch.tensor(q, dtype=d.dtype, device=d.device)))
     return float(d.quantile(q))
-
-
-def _spread(normals: torch.Tensor, order: torch.Tensor, count: int, min_separation: float) -> list[int]:
-    """Up to ``count`` indices of ``normals (K, 3)``, greedily in ``order``, each more than
-    ``min_separation`` degrees from every one kept (one matrix of ``|cos|``, not a call
-    per pair)."""
-    too_close = (normals @ normals.T).abs() > math.cos(math.radians(min_separation))  # (K, K)
-    blocked = torch.zeros(normals.shape[0], dtype=torch.bool, device=normals.device)
-    out: list[int] = []
-    for k in order.tolist():
-        if len(out) == count:
-            break
-        if not bool(blocked[k]):
-            out.append(k)
-            blocked |= too_close[k]
-    return out
 
 
 def _dense_part(points: torch.Tensor, index: KNNIndex) -> tuple[torch.Tensor, KNNIndex]:
@@ -513,7 +497,7 @@ def detect_reflection_plane(
             sample, sub_index, init=init, n_directions=n_directions, grid_step=grid_step, beam=beam,
             spacing=spacing, dtype=dtype,
         )
-        return [(cand[k], b_cand[k]) for k in _spread(cand, order, n_starts, min_start_separation)]
+        return [(cand[k], b_cand[k]) for k in spread_normals(cand, order, n_starts, min_start_separation)]
 
     t_init = time.perf_counter()
 
@@ -644,7 +628,7 @@ def detect_reflection_plane(
             centroid = kpts.mean(0)
             cand = sphere_normals(n_directions, dtype=kpts.dtype).to(kpts.device)
             values = kernel_score(kpts, kindex, cand, -(cand @ centroid), width)  # (n_directions,)
-            best = _spread(cand, values.argsort(descending=True), KERNEL_SCAN_STARTS, min_start_separation)
+            best = spread_normals(cand, values.argsort(descending=True), KERNEL_SCAN_STARTS, min_start_separation)
             scan = [(cand[j], -(cand[j] @ centroid)) for j in best]
             chosen = None
             for nk, bk in [(normal, offset), *pca, *ranked, *scan]:
