@@ -8,13 +8,16 @@ of variance ``sigma^2``):
    distance threshold, precision against the angle threshold, and the errors ``e_d``, ``e_m``
    next to their values for the true correspondences and plane;
 2. accuracy targets: 100 % correct correspondences and normal error < 0.01 deg without
-   noise for every ``d``; median normal error at ``sigma^2 = 0.01`` (``n = 300``, 3-D) against
+   noise for every ``d``; median normal error at ``sigma^2`` = 1e-4, 1e-3, 3e-3 and 0.01
+   (``n = 300``, 3-D; with and without the scan of starting planes) against
    an oracle plane fitted to the true correspondences (:func:`plane_from_pairs`);
    the same set is also solved by a correspondence-free maximum-likelihood fit (the log
    kernel density of the reflected set at the input points, kernel variance ``2 sigma^2``,
    Nelder-Mead from the true plane): how far from the oracle any estimator that does not
    know the correspondences lands at this noise;
-3. the thesis's pair search (``init="thesis"``, Sec. 7.2.4 word for word) against ours;
+3. the thesis's pair search (``init="thesis"``, Sec. 7.2.4 word for word) against ours, both
+   without the scan of extra starting planes (``n_scan=0``); the oracle rows of 2. give the
+   scan's effect at each noise level;
 4. run time of the whole algorithm for ``n`` = 500 (thesis: 38.4 s in MATLAB), 2,000 and
    10,000 points in 3-D;
 5. the (R, t) sub-problem of Sec. 7.2.2 (true correspondences, start 10 deg off) solved by
@@ -143,7 +146,7 @@ def init_comparison(dims, sigmas, n_sets, n=300):
             for k in range(n_sets):
                 s = planted(n, d, s2, seed=900 + k)
                 for init in errs:
-                    r = point_symm(s.points, init=init)
+                    r = point_symm(s.points, init=init, n_scan=0)  # the pair searches alone
                     errs[init].append(float(normal_angle_error(r.normal, s.normal)))
             rows.append({
                 "d": d, "sigma2": s2, "sets": n_sets,
@@ -163,10 +166,11 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3, kde=False):
     5 deg off and yet has a lower symmetry error than the optimum reached from the truth:
     no search can fix those, only another objective.
     """
-    ours, oracle, from_truth, wrong_but_better, ml = [], [], [], 0, []
+    ours, oracle, from_truth, wrong_but_better, ml, no_scan = [], [], [], 0, [], []
     for k in range(n_sets):
         s = planted(n, d, sigma2, seed=500 + k)
         r = point_symm(s.points)
+        no_scan.append(float(normal_angle_error(point_symm(s.points, n_scan=0).normal, s.normal)))
         t = point_symm(s.points, initial=(s.normal, s.offset))
         if kde:
             nrm_ml = kde_ml_plane(s.points.double().numpy(), s.normal.double().numpy(), float(s.offset), sigma2)
@@ -180,6 +184,9 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3, kde=False):
         "sets": n_sets,
         "sigma2": sigma2,
         "median_error_deg": statistics.median(ours),
+        "no_scan_median_error_deg": statistics.median(no_scan),
+        "within_5deg": sum(e < 5.0 for e in ours),
+        "no_scan_within_5deg": sum(e < 5.0 for e in no_scan),
         "oracle_median_error_deg": statistics.median(oracle),
         "ratio": statistics.median(ours) / statistics.median(oracle),
         "from_truth_median_error_deg": statistics.median(from_truth),
@@ -375,13 +382,17 @@ def to_markdown(res) -> str:
             "equally close to its reflection; the oracle is told which."
         ),
         "",
-        "Smaller noise, same protocol:",
+        (
+            "Every noise level of the target, same protocol (15 sets each; \"no scan\": `n_scan=0`, the pair search's "
+            "starts alone, as before the scan of planes through the centroid and the principal axes was added):"
+        ),
         "",
-        "| sigma^2 | median normal error (deg) | oracle (deg) | ratio |",
-        "|---|---|---|---|",
+        "| sigma^2 | median normal error (deg) | within 5 deg | no scan: median (deg) | no scan: within 5 deg | oracle (deg) | ratio |",
+        "|---|---|---|---|---|---|---|",
         *(
-            f"| {r['sigma2']} | {r['median_error_deg']:.3f} | {r['oracle_median_error_deg']:.3f} | {r['ratio']:.2f} |"
-            for r in res["oracle_smaller_noise"]
+            f"| {r['sigma2']} | {r['median_error_deg']:.3f} | {r['within_5deg']} | {r['no_scan_median_error_deg']:.3f} | "
+            f"{r['no_scan_within_5deg']} | {r['oracle_median_error_deg']:.3f} | {r['ratio']:.2f} |"
+            for r in [*res["oracle_smaller_noise"], res["oracle"]]
         ),
         "",
         "## Initialisation: the thesis's pair search (Sec. 7.2.4 as written) against ours (n = 300)",
@@ -432,7 +443,7 @@ def main() -> None:
     res = {"threads": torch.get_num_threads()}
     res["exact"] = exact_target([2, 3, 6, 8], [50, 150, 300], 2 if q else 4)
     res["oracle"] = oracle_target(5 if q else 15, kde=True)
-    res["oracle_smaller_noise"] = [oracle_target(5 if q else 15, sigma2=s2) for s2 in (1e-4, 1e-3)]
+    res["oracle_smaller_noise"] = [oracle_target(5 if q else 15, sigma2=s2) for s2 in (1e-4, 1e-3, 3e-3)]
     res["init"] = init_comparison([2, 3, 6], [0.0, 1e-4, 1e-3], 4 if q else 8)
     res["timing"] = timing([500, 2000, 10000], 1 if q else 3)
     res["tr_vs_pymanopt"] = tr_versus_pymanopt([3, 6], list(range(3 if q else 6)), 1 if q else 3)
@@ -448,9 +459,12 @@ def main() -> None:
             "met": e["all_correspondences_correct"] and e["max_normal_error_deg"] < 0.01,
         },
         {
-            "target": "sigma^2 = 0.01: median normal error <= 1.5x oracle",
-            "measured": f"{o['median_error_deg']:.2f} vs {o['oracle_median_error_deg']:.2f} deg (x{o['ratio']:.1f})",
-            "met": o["ratio"] <= 1.5,
+            "target": "sigma^2 up to 0.01: median normal error <= 1.5x oracle",
+            "measured": "; ".join(
+                f"{r['sigma2']}: {r['median_error_deg']:.2f} vs {r['oracle_median_error_deg']:.2f} deg (x{r['ratio']:.2f})"
+                for r in [*res["oracle_smaller_noise"], o]
+            ),
+            "met": all(r["ratio"] <= 1.5 for r in [*res["oracle_smaller_noise"], o]),
         },
         {"target": "n = 500, 3-D <= 0.3 s (thesis 38.4 s)", "measured": f"{t[500]:.3f} s", "met": t[500] <= 0.3},
         {"target": "n = 10,000, 3-D <= 10 s", "measured": f"{t[10000]:.2f} s", "met": t[10000] <= 10.0},

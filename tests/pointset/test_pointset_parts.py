@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 import torch
+from scipy.spatial import cKDTree
 
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.metrics import (
@@ -16,7 +17,7 @@ from torchsym.metrics import (
     pointset_symmetry_errors,
 )
 from torchsym.pointset.assignment import mirror_assignment
-from torchsym.pointset.initialization import pair_search
+from torchsym.pointset.initialization import normal_scan, pair_search, scan_normals
 from torchsym.pointset.synthetic import make_symmetric_pointset
 
 DT = torch.float64
@@ -74,6 +75,36 @@ class TestPairSearch:
         a = pair_search(x, np.random.default_rng(5))
         b = pair_search(x, np.random.default_rng(5))
         assert all(np.array_equal(u, v) for u, v in zip(a[:5], b[:5]))
+
+
+class TestNormalScan:
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_directions(self, d):
+        normals = scan_normals(d, 50, np.random.default_rng(0))
+        assert normals.shape == (50, d)
+        np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0)
+        assert np.abs(normals @ normals.T - np.eye(50)).max() < 1.0 - 1e-9  # no two the same plane
+
+    @pytest.mark.parametrize("d", [2, 3, 6])
+    def test_best_start_is_the_plane(self, d):
+        # the centroid of a symmetric set lies on its plane and its normal is a principal
+        # axis, so the best scanned start is the plane itself (up to round-off)
+        s = planted(200, d, 7)
+        x = s.points.numpy()
+        starts = normal_scan(x, cKDTree(x), np.random.default_rng(0), n_normals=100, n_keep=3)
+        normal, point = starts[0]
+        assert abs(abs(normal @ s.normal.numpy()) - 1) < 1e-9
+        assert abs(point @ s.normal.numpy() + float(s.offset)) < 1e-9
+        assert 1 <= len(starts) <= 3
+        kept = np.stack([n for n, _ in starts])
+        off_diagonal = np.abs(kept @ kept.T)[~np.eye(len(starts), dtype=bool)]
+        assert (off_diagonal < math.cos(math.radians(10.0))).all()
+
+    def test_seeded(self):
+        x = planted(120, 6, 2, 0.01).points.numpy()
+        a = normal_scan(x, cKDTree(x), np.random.default_rng(3))
+        b = normal_scan(x, cKDTree(x), np.random.default_rng(3))
+        assert all(np.array_equal(u[0], v[0]) and np.array_equal(u[1], v[1]) for u, v in zip(a, b))
 
 
 class TestMakeSymmetricPointset:

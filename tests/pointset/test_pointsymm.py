@@ -132,16 +132,45 @@ class TestPointSymm:
         assert abs(float(res.offset) + 1.0) < 1e-12
 
     def test_noisy_set_multistart(self):
-        # sigma = 0.03 in the unit cube: on this set the thesis's single start (n_starts=1)
-        # ends in a wrong plane; the default also starts from the best single-run planes
+        # sigma = 0.03 in the unit cube: on this set the thesis's single start (n_starts=1,
+        # no scan) ends in a wrong plane; the pair search's other starts find it
         s = planted(300, 3, 506, sigma2=1e-3)
-        single = point_symm(s.points, n_starts=1)
+        single = point_symm(s.points, n_starts=1, n_scan=0)
         assert math.degrees(float(plane_angle(single.normal, s.normal))) > 5.0
-        res = point_symm(s.points)
+        res = point_symm(s.points, n_scan=0)
         assert math.degrees(float(plane_angle(res.normal, s.normal))) < 2.0
         assert res.score > single.score
         with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1"):
             point_symm(s.points, n_starts=0)
+
+    @pytest.mark.parametrize(("d", "seed", "sigma2"), [(3, 505, 1e-3), (3, 500, 3e-3), (6, 501, 1e-2)])
+    def test_noisy_set_scan(self, d, seed, sigma2):
+        # noise near the point spacing: every start of the pair search ends in a wrong
+        # plane; the scan of planes through the centroid and the principal axes finds it
+        s = make_symmetric_pointset(300, d, sigma2, generator=torch.Generator().manual_seed(seed))
+        without = point_symm(s.points, n_scan=0)
+        assert math.degrees(float(plane_angle(without.normal, s.normal))) > 20.0
+        res = point_symm(s.points)
+        assert math.degrees(float(plane_angle(res.normal, s.normal))) < 5.0
+        assert res.cost < without.cost
+        again = point_symm(s.points)  # seeded: the same bits
+        assert torch.equal(again.normal, res.normal) and torch.equal(again.permutation, res.permutation)
+        with pytest.raises(InputValueError, match="n_scan: expected an integer >= 0"):
+            point_symm(s.points, n_scan=-1)
+        with pytest.raises(InputValueError, match="n_scan_starts: expected an integer >= 1"):
+            point_symm(s.points, n_scan_starts=0)
+
+    def test_scan_skipped_on_exact_symmetry(self, monkeypatch):
+        # an exact symmetry scores 1 after the pair search: the scan does not run
+        import torchsym.pointset.pointsymm as ps
+
+        def fail(*args, **kwargs):
+            raise AssertionError("the scan ran")
+
+        monkeypatch.setattr(ps, "normal_scan", fail)
+        s = planted(200, 3, 3)
+        res = point_symm(s.points)
+        assert torch.equal(res.permutation, s.correspondence)
 
     def test_initial_plane(self):
         # a warm start a few degrees off the truth converges to the exact plane

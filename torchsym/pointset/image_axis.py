@@ -118,7 +118,8 @@ def pointsymm_image(
     limit ``match_fraction``) runs inside RANSAC: each iteration fits a random subset of
     ``sample_fraction`` of the corners, and counts the corners whose reflection lands within
     ``inlier_threshold`` pixels of a corner; the best axis is refitted on its inliers. The
-    axis is read off by Theorem 7.2.3.
+    axis is read off by Theorem 7.2.3. RANSAC is the global search here, so PointSymm runs
+    without its scan of extra starting planes (``n_scan=0``).
 
     Args:
         image: ``(H, W)``, ``(C, H, W)`` or ``(1, C, H, W)`` image (integer images are scaled).
@@ -151,14 +152,15 @@ def pointsymm_image(
     best = None
     for _ in range(ransac_iters):
         subset = random_subset(k, m, generator=g)
-        res = point_symm(corners_t.double()[subset], match_fraction=match_fraction, generator=g)
+        # RANSAC is this path's global search: no plane scan inside each sample (n_scan=0)
+        res = point_symm(corners_t.double()[subset], match_fraction=match_fraction, n_scan=0, generator=g)
         nrm, off = res.normal.numpy(), float(res.offset)
         inl, _ = _inliers(corners, tree, nrm, off, inlier_threshold)
         if best is None or inl.sum() > best[0].sum():
             best = (inl, nrm, off)
     inl, nrm, off = best
     if inl.sum() >= 2:
-        refit = point_symm(corners_t.double()[torch.from_numpy(inl)], generator=g)
+        refit = point_symm(corners_t.double()[torch.from_numpy(inl)], n_scan=0, generator=g)
         r_inl, _ = _inliers(corners, tree, refit.normal.numpy(), float(refit.offset), inlier_threshold)
         if r_inl.sum() >= inl.sum():
             nrm, off = refit.normal.numpy(), float(refit.offset)

@@ -26,8 +26,11 @@ What the thesis leaves open, and what we add so that the search survives mild no
 Each run gives one polished plane; the robust median of the ``n_runs`` planes (and of their
 points) starts the alternation. On the synthetic sets of Sec. 7.4.2 (``n = 300``, 3-D) this
 start is good enough up to noise of standard deviation about 0.03 (``sigma^2 = 1e-3``); at
-``sigma^2 >= 3e-3`` single pairs no longer define usable planes and the start, hence the
-result, is usually wrong (see ``benchmarks/results/pointset.md``).
+``sigma^2 >= 3e-3`` single pairs no longer define usable planes and the start is usually
+wrong. :func:`normal_scan` (an extension) gives starts that need no pair: planes through the
+centroid, scored by how close the reflected set lands to the set; :func:`point_symm
+<torchsym.pointset.point_symm>` adds them when the pair search's plane leaves most points
+without an exact mirror (see ``benchmarks/results/pointset.md``).
 """
 
 from __future__ import annotations
@@ -38,9 +41,10 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from torchsym.geometry.reflection import plane_from_pairs
+from torchsym.geometry.reflection import plane_from_pairs, spread_normals
+from torchsym.pointcloud.candidates import sphere_normals
 
-__all__ = ["pair_search", "thesis_pair_search"]
+__all__ = ["normal_scan", "pair_search", "scan_normals", "thesis_pair_search"]
 
 
 def _bisector(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -309,3 +313,70 @@ def thesis_pair_search(
     norm = np.linalg.norm(normal)
     normal = medoid if norm < 1e-12 else normal / norm
     return normal, np.median(mid, axis=0), nrm, mid, found
+
+
+def scan_normals(d: int, count: int, rng: np.random.Generator) -> np.ndarray:
+    """``(count, d)`` unit normals spread over the directions of hyperplanes in ``R^d``.
+
+    ``d = 2``: ``count`` angles evenly in ``[0, pi)``; ``d = 3``: the Fibonacci lattice on
+    the half sphere (:func:`torchsym.pointcloud.candidates.sphere_normals`); ``d >= 4``:
+    Gaussian directions drawn from ``rng`` (no lattice covers high-dimensional spheres
+    evenly at this count).
+    """
+    if d == 2:
+        angle = np.pi * (np.arange(count) + 0.5) / count
+        return np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    if d == 3:
+        return sphere_normals(count).numpy()
+    out = rng.standard_normal((count, d))
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def normal_scan(
+    x: np.ndarray,
+    tree: cKDTree,
+    rng: np.random.Generator,
+    *,
+    n_normals: int = 200,
+    n_keep: int = 4,
+    keep_fraction: float = 1.0,
+    n_sample: int = 1000,
+    min_separation: float = 10.0,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Starting planes from a scan of hyperplanes through the centroid (an extension of Sec. 7.2.4).
+
+    The candidates are the principal axes of ``x`` (the normal of a mirror-symmetric set
+    is an eigenvector of its covariance, since the reflection commutes with it) and
+    ``n_normals`` directions of :func:`scan_normals`, all through the centroid, which lies
+    on the plane of a symmetric set. Each is scored on ``n_sample`` points by the mean
+    squared distance from a reflected point to its nearest input point, over the
+    ``keep_fraction`` share of smallest distances (the cardinality limit of Sec. 7.4.4 for
+    sets with missing parts), and the ``n_keep`` best, at least ``min_separation`` degrees
+    apart, are returned. Unlike the pair search this needs no pair of points to pass a
+    test, so it does not break down when the noise is comparable to the point spacing.
+
+    Args:
+        x: ``(N, D)`` points.
+        tree: :class:`cKDTree` of ``x``.
+        rng: draws the scored sample (and the directions when ``D >= 4``).
+        n_normals: directions scanned besides the ``D`` principal axes.
+        n_keep: most planes returned.
+        keep_fraction: share of the sample whose distances are averaged, in (0, 1].
+        n_sample: points scored (all when fewer).
+        min_separation: smallest angle between two returned normals, in degrees.
+
+    Returns:
+        ``(normal (D,), point (D,))`` pairs, best first.
+    """
+    n, d = x.shape
+    centre = x.mean(axis=0)  # (D,)
+    centred = x - centre
+    _, axes = np.linalg.eigh(centred.T @ centred)  # (D, D) columns
+    normals = np.concatenate([axes.T, scan_normals(d, n_normals, rng)])  # (K, D)
+    sample = centred[np.sort(rng.choice(n, size=min(n, n_sample), replace=False))]  # (m, D)
+    moved = sample[None] - 2.0 * (sample @ normals.T).T[:, :, None] * normals[:, None, :]  # (K, m, D)
+    dist, _ = tree.query(moved.reshape(-1, d) + centre, k=1)
+    dist = np.sort(dist.reshape(normals.shape[0], -1) ** 2, axis=1)  # (K, m)
+    cost = dist[:, : max(1, round(keep_fraction * dist.shape[1]))].mean(axis=1)  # (K,)
+    chosen = spread_normals(torch.from_numpy(normals), torch.from_numpy(np.argsort(cost, kind="stable")), n_keep, min_separation)
+    return [(normals[k], centre.copy()) for k in chosen]
