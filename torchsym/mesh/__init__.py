@@ -34,6 +34,7 @@ from torchsym.mesh.orientation import (
     resolvent_mask,
 )
 from torchsym.mesh.pairs import eigenfunction_signs, pair_affinity, symmetric_pairs
+from torchsym.mesh.repair import boundary_loops, close_holes
 from torchsym.mesh.validate import ValidatedMesh, validate_mesh
 
 __all__ = [
@@ -43,6 +44,8 @@ __all__ = [
     "Mesh",
     "ValidatedMesh",
     "adjacency_matrix",
+    "boundary_loops",
+    "close_holes",
     "correct_eigenfunctions",
     "correction_cost",
     "cotangent_laplacian",
