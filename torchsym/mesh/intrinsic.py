@@ -581,11 +581,13 @@ def intrinsic_symmetry(
             map is still one of the input's vertices). Holes at asymmetric places bend the
             eigenfunctions and the HKS out of symmetry, and the pairing of Sec. 6.2.4 then
             finds too few pairs. On the benchmark's meshes with 10 % of the area punched
-            out in 3 discs (``benchmarks/bench_mesh.py --step 2``) the correspondence rate
-            went from 46.5 to 72.4 % (synthetic, 12 meshes), 55.4 to 57.3 % (FAUST, 13)
-            and 39.6 to 54.5 % (TOSCA, 10), and the median time fell (fewer hypotheses
-            fail their tests); 3 FAUST shapes got worse (0.88 -> 0.20 on one). Costs
-            about 15 ms at 5,000 vertices; closed meshes are untouched. Boundaries whose
+            out in 3 discs (``benchmarks/bench_mesh.py``, every 4th FAUST and TOSCA shape)
+            the correspondence rate went from 46.5 to 72.4 % (synthetic, 12 meshes: 7
+            better, none worse by more than 5 points), 44.9 to 54.9 % (FAUST, 25: 11
+            better, 4 worse, 0.74 -> 0.40 on one) and 59.1 to 84.6 % (TOSCA, 19: 12
+            better, none worse), and the median time fell (fewer hypotheses fail their
+            tests). Costs 15 to 30 ms at 5,000 to 13,000 vertices; closed meshes are
+            untouched. Boundaries whose
             patch would exceed a tenth of the area (the outline of an open surface) stay
             open; a small natural boundary (a scan cut at the neck) is covered, which
             suits a symmetric cut.

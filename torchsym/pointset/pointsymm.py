@@ -34,8 +34,8 @@ logger = logging.getLogger(__name__)
 _ASSIGNMENTS = ("auto", "exact", "sparse")
 
 # The scan of extra starting planes is skipped when the best start already scores this
-# much (the score is 1 for an exact symmetry, and about 0.1 to 0.2 for the true plane of
-# the noisy sets of Sec. 7.4.2 at sigma^2 = 1e-3).
+# much. The score is 1 for an exact symmetry; for the true plane of the sets of Sec. 7.4.2
+# (n = 300, 3-D) it is 0.5 to 0.6 at sigma^2 = 1e-4 and 0.07 to 0.14 at 1e-3.
 _SCAN_BELOW_SCORE = 0.5
 
 
@@ -231,10 +231,11 @@ def point_symm(
     and polished on a subset of the points, and the robust median of the runs' planes. Like
     the thesis's method it needs the noise to be small against the spacing of the points:
     on the sets of Sec. 7.4.2 (``n = 300``, 3-D) its start is usually wrong from
-    ``sigma^2 = 3e-3`` on (the scan below makes up for it). With ``n_starts > 1`` the alternation also runs from the best-verified
-    planes of single runs that differ from the median (by more than 5 degrees or 0.05 in
-    offset) and the run with the least symmetry error wins; when every run agrees (as
-    without noise) there is only one start and no extra cost. When the best plane found
+    ``sigma^2 = 3e-3`` on (the scan below makes up for it). With ``n_starts > 1`` the
+    alternation also runs from the best-verified planes of single runs that differ from
+    the median (by more than 5 degrees or 0.05 in offset) and the run with the least
+    symmetry error wins; when every run agrees (as without noise) there is only one start
+    and no extra cost. When the best plane found
     so far still leaves most points without an exact mirror (score below 0.5: noise, or a
     wrong plane), ``n_scan`` more planes through the centroid and the principal axes are
     scored, and the alternation also runs from the ``n_scan_starts`` best of them
