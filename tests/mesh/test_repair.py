@@ -7,7 +7,7 @@ import torch
 from torchsym.errors import InputValueError
 from torchsym.mesh.intrinsic import intrinsic_symmetry
 from torchsym.mesh.operators import edge_face_counts
-from torchsym.mesh.repair import boundary_loops, close_holes
+from torchsym.mesh.repair import HoleFilling, boundary_loops, close_holes
 from torchsym.mesh.synthetic import icosphere, punch_holes
 from torchsym.metrics.mesh import correspondence_rate
 
@@ -23,30 +23,55 @@ class TestCloseHoles:
         v, f = _sphere_with_holes([0, 300])
         v_before, f_before = v.copy(), f.copy()
         assert boundary_loops(f, v.shape[0]) == 2
-        closed, count = close_holes(v, f)
-        assert count == 2 and boundary_loops(closed, v.shape[0]) == 0
-        np.testing.assert_array_equal(closed[: f.shape[0]], f)  # the input's triangles first
-        assert (edge_face_counts(closed)[1] == 2).all()  # a closed manifold
+        filling = close_holes(v, f)
+        assert isinstance(filling, HoleFilling) and filling.notes == ()
+        assert filling.holes_closed == 2 and boundary_loops(filling.faces, v.shape[0]) == 0
+        assert filling.faces.dtype == np.int64
+        np.testing.assert_array_equal(filling.faces[: f.shape[0]], f)  # the input's triangles first
+        assert (edge_face_counts(filling.faces)[1] == 2).all()  # a closed manifold
         np.testing.assert_array_equal(v, v_before)  # inputs untouched
         np.testing.assert_array_equal(f, f_before)
+
+    def test_holes_touching_at_a_vertex(self):
+        # the fans of two vertices two edges apart share a vertex: two loops, two patches
+        s = icosphere(3)
+        v, f = s.vertices.numpy(), s.faces.numpy()
+        ring = np.setdiff1d(f[(f == 0).any(axis=1)], [0])
+        second = np.setdiff1d(f[np.isin(f, ring).any(axis=1)], np.r_[ring, 0])[0]
+        holed = f[~np.isin(f, [0, second]).any(axis=1)]
+        assert boundary_loops(holed, v.shape[0]) == 2
+        filling = close_holes(v, holed)
+        assert filling.holes_closed == 2 and boundary_loops(filling.faces, v.shape[0]) == 0
 
     def test_closed_mesh_unchanged(self):
         s = icosphere(2)
         f = s.faces.numpy()
-        closed, count = close_holes(s.vertices.numpy(), f)
-        assert count == 0 and closed is f
+        filling = close_holes(s.vertices.numpy(), f)
+        assert filling.holes_closed == 0 and filling.notes == ()
+        np.testing.assert_array_equal(filling.faces, f)
 
     def test_outline_of_open_surface_left_open(self):
         # a hemisphere's rim is no hole: its patch would be half the surface's area
         s = icosphere(3)
         v, f = s.vertices.numpy(), s.faces.numpy()
         upper = f[(v[f][:, :, 2] > -1e-9).all(axis=1)]
-        closed, count = close_holes(v, upper)
-        assert count == 0 and closed is upper
+        filling = close_holes(v, upper)
+        assert filling.holes_closed == 0 and "left open" in filling.notes[0]
+        np.testing.assert_array_equal(filling.faces, upper)
         assert boundary_loops(upper, v.shape[0]) == 1
         # with a larger limit it is covered
-        closed, count = close_holes(v, upper, max_area=1.0)
-        assert count == 1 and boundary_loops(closed, v.shape[0]) == 0
+        filling = close_holes(v, upper, max_area=1.0)
+        assert filling.holes_closed == 1 and boundary_loops(filling.faces, v.shape[0]) == 0
+
+    def test_small_hole_kept_beside_an_outline(self):
+        # an open hemisphere with a small hole: the hole is covered, the rim left open
+        s = icosphere(3)
+        v, f = s.vertices.numpy(), s.faces.numpy()
+        top = int(np.argmax(v[:, 2]))
+        upper = f[(v[f][:, :, 2] > -1e-9).all(axis=1) & ~(f == top).any(axis=1)]
+        assert boundary_loops(upper, v.shape[0]) == 2
+        filling = close_holes(v, upper)
+        assert filling.holes_closed == 1 and boundary_loops(filling.faces, v.shape[0]) == 1
 
 
 class TestIntrinsicSymmetryWithHoles:

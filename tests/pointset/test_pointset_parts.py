@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -99,6 +100,25 @@ class TestNormalScan:
         kept = np.stack([n for n, _ in starts])
         off_diagonal = np.abs(kept @ kept.T)[~np.eye(len(starts), dtype=bool)]
         assert (off_diagonal < math.cos(math.radians(10.0))).all()
+
+    def test_directions_beyond_the_principal_axes(self):
+        # a set with the symmetries of a regular tetrahedron has an isotropic covariance, so
+        # its principal axes are arbitrary (here 15 to 45 deg from every mirror plane); the
+        # scanned directions find a mirror plane
+        p = np.random.default_rng(0).uniform(-1.0, 1.0, (12, 3))
+        signs = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
+        x = np.concatenate([p[:, list(perm)] * sg for perm in itertools.permutations(range(3)) for sg in signs])
+        x = x + np.array([0.3, -0.2, 0.5])
+        mirrors = np.array([[1, -1, 0], [1, 1, 0], [1, 0, -1], [1, 0, 1], [0, 1, -1], [0, 1, 1]]) / math.sqrt(2.0)
+        normal, _ = normal_scan(x, cKDTree(x), np.random.default_rng(0), n_normals=200, n_keep=3)[0]
+        assert np.degrees(np.arccos(np.clip(np.abs(mirrors @ normal).max(), 0.0, 1.0))) < 5.0
+
+    def test_flat_set_trivial_mirror_left_out(self):
+        # every set lying in a hyperplane is its own mirror across it; that plane is no start
+        x2 = planted(200, 2, 4, 3e-3).points.numpy()
+        x = np.concatenate([x2, np.zeros((200, 1))], axis=1)
+        starts = normal_scan(x, cKDTree(x), np.random.default_rng(0), n_normals=100, n_keep=4)
+        assert starts and all(abs(n[2]) < 0.9 for n, _ in starts)
 
     def test_seeded(self):
         x = planted(120, 6, 2, 0.01).points.numpy()

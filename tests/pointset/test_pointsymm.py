@@ -160,8 +160,9 @@ class TestPointSymm:
         with pytest.raises(InputValueError, match="n_scan_starts: expected an integer >= 1"):
             point_symm(s.points, n_scan_starts=0)
 
-    def test_scan_skipped_on_exact_symmetry(self, monkeypatch):
-        # an exact symmetry scores 1 after the pair search: the scan does not run
+    def test_scan_skipped_on_exact_symmetry_and_warm_start(self, monkeypatch):
+        # an exact symmetry scores 1 after the pair search (at most match_fraction when only
+        # that share may match): the scan does not run; nor after a caller's start
         import torchsym.pointset.pointsymm as ps
 
         def fail(*args, **kwargs):
@@ -171,6 +172,20 @@ class TestPointSymm:
         s = planted(200, 3, 3)
         res = point_symm(s.points)
         assert torch.equal(res.permutation, s.correspondence)
+        part = point_symm(s.points, match_fraction=0.4)
+        assert math.degrees(float(plane_angle(part.normal, s.normal))) < 1e-6
+        noisy = planted(300, 3, 500, sigma2=3e-3)
+        point_symm(noisy.points, initial=(noisy.normal, noisy.offset))
+
+    def test_flat_set_not_its_trivial_mirror(self):
+        # a symmetric set in the plane z = 0 of 3-D space is also its own mirror across that
+        # plane; the scan must not return it
+        flat = make_symmetric_pointset(300, 2, 3e-3, generator=torch.Generator().manual_seed(3))
+        x = torch.cat([flat.points, torch.zeros(300, 1, dtype=flat.points.dtype)], dim=1)
+        truth = torch.cat([flat.normal, torch.zeros(1, dtype=flat.normal.dtype)])
+        res = point_symm(x)
+        assert math.degrees(float(plane_angle(res.normal, truth))) < 2.0
+        assert float((res.permutation == torch.arange(300)).double().mean()) < 0.5
 
     def test_initial_plane(self):
         # a warm start a few degrees off the truth converges to the exact plane

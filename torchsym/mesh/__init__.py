@@ -34,11 +34,12 @@ from torchsym.mesh.orientation import (
     resolvent_mask,
 )
 from torchsym.mesh.pairs import eigenfunction_signs, pair_affinity, symmetric_pairs
-from torchsym.mesh.repair import boundary_loops, close_holes
+from torchsym.mesh.repair import HoleFilling, boundary_loops, close_holes
 from torchsym.mesh.validate import ValidatedMesh, validate_mesh
 
 __all__ = [
     "CorrectionResult",
+    "HoleFilling",
     "IntrinsicSymmetry",
     "IntrinsicSymmetryResult",
     "Mesh",

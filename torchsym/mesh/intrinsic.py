@@ -127,8 +127,9 @@ class IntrinsicSymmetryResult(Result):
         hypothesis: which hypothesis gave the map: ``"pairs"`` (the thesis's method),
             ``"hks_pairs"`` (pairs on HKS alone) or ``"orientation"`` (the
             orientation-reversing functional map).
-        holes_closed: boundary loops covered by new triangles before the spectrum was
-            computed (``fill_holes``; 0 for a closed mesh).
+        holes_closed: holes covered by a patch of new triangles before the spectrum was
+            computed (``fill_holes``, :func:`~torchsym.mesh.repair.close_holes`; 0 for a
+            closed mesh or when every boundary was left open, with a note saying why).
         notes: what the solver did that a caller should know (e.g. dropped components).
     """
 
@@ -642,12 +643,14 @@ def intrinsic_symmetry(
     holes_closed = 0
     if fill_holes:
         n_faces = f.shape[0]
-        f, holes_closed = close_holes(v, f)  # (F'', 3) the input's triangles first
+        filling = close_holes(v, f)
+        f, holes_closed = filling.faces, filling.holes_closed  # (F'', 3) the input's triangles first
         if holes_closed:
             notes.append(
                 f"closed {holes_closed} holes with {f.shape[0] - n_faces} new triangles before computing the "
                 "spectrum (fill_holes)"
             )
+        notes.extend(f"fill_holes: {note}" for note in filling.notes)
     v = (v - v.mean(axis=0)) / math.sqrt(face_areas(v, f).sum())  # unit area
     n = v.shape[0]
     timings["validate"], tic = time.perf_counter() - tic, time.perf_counter()

@@ -14,35 +14,67 @@ dependency already) does the triangulation.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from torchsym.mesh.operators import edge_face_counts, face_areas
 
-__all__ = ["boundary_loops", "close_holes"]
+__all__ = ["HoleFilling", "boundary_loops", "close_holes"]
+
+
+@dataclasses.dataclass(frozen=True)
+class HoleFilling:
+    """What :func:`close_holes` did.
+
+    Attributes:
+        faces: ``(F', 3)`` int64, the input's triangles first, then the patches kept.
+        holes_closed: patches kept (one per covered hole; 0: ``faces`` are the input's).
+        notes: why patches were left out, if any were.
+    """
+
+    faces: np.ndarray
+    holes_closed: int
+    notes: tuple[str, ...] = ()
 
 
 def boundary_loops(faces: np.ndarray, n_vertices: int) -> int:
-    """Number of boundary loops: connected components of the edges held by one triangle."""
-    edges, counts = edge_face_counts(faces)
+    """Number of boundary loops: the cycle rank ``E - V + C`` of the graph of edges held by
+    one triangle (on a manifold mesh every boundary vertex has even degree there, so the
+    boundary is a union of loops; two loops that touch at a vertex count as two)."""
+    edges, counts = edge_face_counts(np.asarray(faces, dtype=np.int64))
     border = edges[counts == 1]  # (B, 2)
     if border.shape[0] == 0:
         return 0
     graph = sp.coo_matrix((np.ones(border.shape[0]), (border[:, 0], border[:, 1])), shape=(n_vertices, n_vertices))
     _, labels = connected_components(graph, directed=False)
-    return int(np.unique(labels[np.unique(border)]).size)
+    used = np.unique(border)
+    return int(border.shape[0] - used.size + np.unique(labels[used]).size)
 
 
-def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.1) -> tuple[np.ndarray, int]:
-    """Faces of ``(vertices, faces)`` with its boundary loops covered by new triangles.
+def _patches(new: np.ndarray) -> np.ndarray:
+    """Label ``(N,)`` of the patch of each new triangle: triangles joined through shared edges."""
+    edges = np.sort(np.concatenate([new[:, [0, 1]], new[:, [1, 2]], new[:, [2, 0]]]), axis=1)  # (3N, 2)
+    owner = np.tile(np.arange(new.shape[0]), 3)  # (3N,)
+    _, key = np.unique(edges, axis=0, return_inverse=True)
+    order = np.argsort(key.ravel(), kind="stable")
+    same = key.ravel()[order][1:] == key.ravel()[order][:-1]  # consecutive copies of one edge
+    a, b = owner[order][:-1][same], owner[order][1:][same]
+    graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(new.shape[0], new.shape[0]))
+    return connected_components(graph, directed=False)[1]
+
+
+def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.1) -> HoleFilling:
+    """Cover the holes of ``(vertices, faces)`` with new triangles between boundary vertices.
 
     Uses MeshLab's ``meshing_close_holes`` with its check that the new triangles do not
-    intersect the mesh; new triangles of zero area (collinear boundary vertices) are left
-    out, so a hole may stay partly open. Vertices are neither added nor moved. A patch
-    larger than ``max_area`` times the mesh's area is left out: such a boundary is the
-    outline of an open surface (a panel, a mask), not a hole, and covering it would glue
-    a second face onto the surface.
+    intersect the mesh. Vertices are neither added nor moved. Left out, and said in
+    ``notes``: new triangles of zero area (collinear boundary vertices; the hole stays
+    partly open), a patch larger than ``max_area`` times the mesh's area (the outline of
+    an open surface, a panel or a mask, not a hole: covering it would glue a second face
+    onto the surface), and a patch that would make an edge non-manifold.
 
     Args:
         vertices: ``(V, 3)`` positions.
@@ -50,40 +82,50 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
         max_area: the largest patch, as a share of the mesh's area.
 
     Returns:
-        ``faces (F', 3)`` int64 with the input's triangles first, and the number of
-        boundary loops closed (0 leaves ``faces`` as they were).
+        A :class:`HoleFilling`.
     """
     import pymeshlab
 
-    before = boundary_loops(faces, vertices.shape[0])
-    if before == 0:
-        return faces, 0
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64)
+    if boundary_loops(faces, vertices.shape[0]) == 0:
+        return HoleFilling(faces, 0)
     ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(vertices, dtype=np.float64),
-                               face_matrix=np.ascontiguousarray(faces, dtype=np.int32)))
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(vertices), face_matrix=np.ascontiguousarray(faces, dtype=np.int32)))
     try:
         ms.meshing_close_holes(maxholesize=max(3, 2 * faces.shape[0]), selfintersection=True, newfaceselected=True)
-    except pymeshlab.PyMeshLabException:
-        return faces, 0
+    except pymeshlab.PyMeshLabException as exc:
+        return HoleFilling(faces, 0, (f"holes left open: MeshLab's hole filling failed ({exc})",))
     out = ms.current_mesh()
     if out.vertex_number() != vertices.shape[0] or not np.array_equal(out.vertex_matrix(), vertices):
-        return faces, 0  # MeshLab moved or added vertices: the map would no longer be the input's
+        return HoleFilling(faces, 0, ("holes left open: MeshLab's hole filling moved or added vertices",))
     new = out.face_matrix()[out.face_selection_array()].astype(np.int64)  # (N, 3) the patches
-    area = face_areas(vertices, new)
+    notes: list[str] = []
     old_area = face_areas(vertices, faces)
-    keep = area > 1e-12 * max(float(old_area.max()), np.finfo(float).tiny)
-    # one patch per hole: the new triangles joined through shared vertices
-    n = vertices.shape[0]
-    ring = np.concatenate([new[:, [0, 1]], new[:, [1, 2]]])
-    graph = sp.coo_matrix((np.ones(ring.shape[0]), (ring[:, 0], ring[:, 1])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
-    patch = labels[new[:, 0]]  # (N,)
-    patch_area = np.bincount(patch, weights=area, minlength=labels.max() + 1)  # per label
-    keep &= patch_area[patch] <= max_area * float(old_area.sum())
-    new = new[keep]
+    area = face_areas(vertices, new)
+    flat = area <= 1e-12 * max(float(old_area.max()), np.finfo(float).tiny)
+    if flat.any():
+        notes.append(f"{int(flat.sum())} new triangles of zero area left out")
+        new, area = new[~flat], area[~flat]
     if new.shape[0] == 0:
-        return faces, 0
-    closed = np.concatenate([faces, new])
-    if (edge_face_counts(closed)[1] > 2).any():
-        return faces, 0  # a patch would make an edge non-manifold
-    return closed, before - boundary_loops(closed, vertices.shape[0])
+        return HoleFilling(faces, 0, tuple(notes))
+    patch = _patches(new)  # (N,)
+    patch_area = np.bincount(patch, weights=area)  # (P,)
+    large = patch_area > max_area * float(old_area.sum())
+    if large.any():
+        notes.append(
+            f"{int(large.sum())} boundary loops left open: covering them would add more than {max_area:g} of the "
+            "area (the outline of an open surface, not a hole)"
+        )
+    keep = ~large[patch]
+    edges, counts = edge_face_counts(np.concatenate([faces, new[keep]]))
+    if (counts > 2).any():  # patches that would make an edge non-manifold are left out
+        bad = {tuple(e) for e in edges[counts > 2].tolist()}
+        tri_edges = np.sort(np.stack([new[:, [0, 1]], new[:, [1, 2]], new[:, [2, 0]]], axis=1), axis=2)  # (N, 3, 2)
+        touches = np.array([any(tuple(e) in bad for e in tri.tolist()) for tri in tri_edges])
+        drop = np.unique(patch[touches & keep])
+        keep &= ~np.isin(patch, drop)
+        notes.append(f"{drop.size} patches left out: they would make an edge non-manifold")
+    if not keep.any():
+        return HoleFilling(faces, 0, tuple(notes))
+    return HoleFilling(np.concatenate([faces, new[keep]]), int(np.unique(patch[keep]).size), tuple(notes))

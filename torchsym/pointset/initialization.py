@@ -350,10 +350,15 @@ def normal_scan(
     ``n_normals`` directions of :func:`scan_normals`, all through the centroid, which lies
     on the plane of a symmetric set. Each is scored on ``n_sample`` points by the mean
     squared distance from a reflected point to its nearest input point, over the
-    ``keep_fraction`` share of smallest distances (the cardinality limit of Sec. 7.4.4 for
-    sets with missing parts), and the ``n_keep`` best, at least ``min_separation`` degrees
-    apart, are returned. Unlike the pair search this needs no pair of points to pass a
-    test, so it does not break down when the noise is comparable to the point spacing.
+    ``keep_fraction`` share of smallest distances (the cardinality limit of Sec. 7.4.4; the
+    planes still pass through the centroid, which lies on the plane only for a complete
+    set, so with missing parts the alternation has to move them), and the ``n_keep``
+    best, at least ``min_separation`` degrees apart, are returned. A plane whose
+    reflection sends most sampled points nearest to themselves is left out: it is the
+    trivial mirror of a set that is flat (or thinner than its point spacing) across it,
+    which every set has when it lies in a hyperplane. Unlike the pair search this needs
+    no pair of points to pass a test, so it does not break down when the noise is
+    comparable to the point spacing.
 
     Args:
         x: ``(N, D)`` points.
@@ -373,10 +378,15 @@ def normal_scan(
     centred = x - centre
     _, axes = np.linalg.eigh(centred.T @ centred)  # (D, D) columns
     normals = np.concatenate([axes.T, scan_normals(d, n_normals, rng)])  # (K, D)
-    sample = centred[np.sort(rng.choice(n, size=min(n, n_sample), replace=False))]  # (m, D)
+    rows = np.sort(rng.choice(n, size=min(n, n_sample), replace=False))  # (m,)
+    sample = centred[rows]  # (m, D)
     moved = sample[None] - 2.0 * (sample @ normals.T).T[:, :, None] * normals[:, None, :]  # (K, m, D)
-    dist, _ = tree.query(moved.reshape(-1, d) + centre, k=1)
+    dist, nearest = tree.query(moved.reshape(-1, d) + centre, k=1)
+    to_self = (nearest.reshape(normals.shape[0], -1) == rows[None]).mean(axis=1)  # (K,)
     dist = np.sort(dist.reshape(normals.shape[0], -1) ** 2, axis=1)  # (K, m)
     cost = dist[:, : max(1, round(keep_fraction * dist.shape[1]))].mean(axis=1)  # (K,)
-    chosen = spread_normals(torch.from_numpy(normals), torch.from_numpy(np.argsort(cost, kind="stable")), n_keep, min_separation)
+    cost[to_self > 0.5] = np.inf  # the trivial mirror of a flat set
+    order = np.argsort(cost, kind="stable")
+    order = order[np.isfinite(cost[order])]
+    chosen = spread_normals(torch.from_numpy(normals), torch.from_numpy(order), n_keep, min_separation)
     return [(normals[k], centre.copy()) for k in chosen]

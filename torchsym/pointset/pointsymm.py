@@ -231,7 +231,7 @@ def point_symm(
     and polished on a subset of the points, and the robust median of the runs' planes. Like
     the thesis's method it needs the noise to be small against the spacing of the points:
     on the sets of Sec. 7.4.2 (``n = 300``, 3-D) its start is usually wrong from
-    ``sigma^2 = 3e-3`` on (the scan below makes up for it). With ``n_starts > 1`` the
+    ``sigma^2 = 3e-3`` on (the scan below then finds most of the planes that it misses). With ``n_starts > 1`` the
     alternation also runs from the best-verified planes of single runs that differ from
     the median (by more than 5 degrees or 0.05 in offset) and the run with the least
     symmetry error wins; when every run agrees (as without noise) there is only one start
@@ -357,10 +357,14 @@ def point_symm(
 
     for start_normal, start_point in starts:
         run(start_normal, start_point)
-    if initial is None and n_scan and score_of(best[2], best[3]) < _SCAN_BELOW_SCORE:
-        keep = 1.0 if n_matches is None else n_matches / n
+    keep = 1.0 if n_matches is None else n_matches / n
+    # the score counts unmatched points as 0, so it is compared on the share that may match
+    if initial is None and n_scan and score_of(best[2], best[3]) < _SCAN_BELOW_SCORE * keep:
+        pair_search_best = best
         for start_normal, start_point in normal_scan(xn, tree, rng, n_normals=n_scan, n_keep=n_scan_starts, keep_fraction=keep):
             run(start_normal, start_point)
+        if best is not pair_search_best and np.mean(best[2] == np.arange(n)) > 0.5:
+            best = pair_search_best  # a scanned start ended in the trivial mirror of a flat set
     _, var, perm, dist2, it, converged = best
 
     # Read the plane off the rotations (Theorem 7.2.3) and undo the normalisation.
