@@ -1,7 +1,13 @@
-"""Nearest neighbours: scipy's cKDTree for CPU tensors, chunked ``torch.cdist`` elsewhere.
+"""Nearest neighbours: scipy's cKDTree for CPU tensors; on other devices, brute force or the tree.
 
 On a CPU, a kd-tree answers a query in O(log n) and is about 50x faster than a dense
-distance matrix; on a GPU a chunked ``cdist`` + ``topk`` keeps everything on the device.
+distance matrix. On a GPU, brute force keeps small problems on the device: chunked
+``cdist`` in its matrix-product form picks ``k + 4`` candidates and their exact
+differences order them (the product form alone swapped close neighbours in 0.02-0.2 % of
+float32 queries; the exact form of ``cdist`` is 20-60x slower). Its cost grows with
+queries x points, so past ``brute_force_max`` distances a query copies the points to the
+host and asks a kd-tree built there once. On an H100 beside 2 CPU threads the two cross
+near 1e9 distances (``benchmarks/results/device.md``).
 """
 
 from __future__ import annotations
@@ -10,7 +16,12 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.errors import InputValueError
+
 __all__ = ["KNNIndex", "mutual_nearest"]
+
+BRUTE_FORCE_MAX = 1_000_000_000  # queries x points above which a device query uses the host's kd-tree
+RERANK_MARGIN = 4  # extra brute-force candidates whose exact distances are compared
 
 
 class KNNIndex:
@@ -20,14 +31,37 @@ class KNNIndex:
         points: ``(N, D)`` reference points.
         workers: threads for the CPU kd-tree query (at most 2 on small machines).
         chunk: query rows per ``cdist`` block on non-CPU devices.
+        brute_force_max: on non-CPU devices, the most query-point distances a query computes
+            by brute force; larger queries go to a kd-tree on the host, built on first use.
+        method: ``"auto"`` (the tree on the CPU, the rule above elsewhere), ``"tree"`` or
+            ``"brute"`` on any device.
     """
 
-    def __init__(self, points: torch.Tensor, *, workers: int = 2, chunk: int = 4096) -> None:
+    def __init__(
+        self,
+        points: torch.Tensor,
+        *,
+        workers: int = 2,
+        chunk: int = 4096,
+        brute_force_max: float = BRUTE_FORCE_MAX,
+        method: str = "auto",
+    ) -> None:
+        if method not in ("auto", "tree", "brute"):
+            raise InputValueError(f"method: expected 'auto', 'tree' or 'brute', got {method!r}")
         self.points = points
         self.workers = workers
         self.chunk = chunk
+        self.brute_force_max = brute_force_max
+        if method == "auto":
+            method = "tree" if points.device.type == "cpu" else "auto"
+        self.method = method
         self.on_cpu = points.device.type == "cpu"
-        self._tree = cKDTree(points.detach().to(torch.float64).numpy()) if self.on_cpu else None
+        self._tree = self._build() if method == "tree" else None
+        self._centre: torch.Tensor | None = None
+        self._centred: torch.Tensor | None = None
+
+    def _build(self) -> cKDTree:
+        return cKDTree(self.points.detach().to("cpu", torch.float64).numpy())
 
     def query(
         self, queries: torch.Tensor, k: int = 1, *, max_distance: float = float("inf")
@@ -45,21 +79,33 @@ class KNNIndex:
         Returns:
             ``dist (M,)`` and ``index (M,)`` int64 for ``k == 1``, else ``(M, k)`` each.
         """
-        if self._tree is not None:
+        big = queries.shape[0] * self.points.shape[0] > self.brute_force_max
+        if self.method == "tree" or (self.method == "auto" and big):
+            if self._tree is None:
+                self._tree = self._build()
             # threads only pay off on large batches: starting them costs ~0.1 ms each
             workers = self.workers if queries.shape[0] * k >= 20000 else 1
             d, i = self._tree.query(
-                queries.detach().to(torch.float64).numpy(), k=k, workers=workers, distance_upper_bound=max_distance
+                queries.detach().to("cpu", torch.float64).numpy(), k=k, workers=workers, distance_upper_bound=max_distance
             )
-            dist = torch.from_numpy(np.asarray(d)).to(queries.dtype)
-            idx = torch.from_numpy(np.asarray(i, dtype=np.int64))
+            dist = torch.from_numpy(np.asarray(d)).to(queries.device, queries.dtype)
+            idx = torch.from_numpy(np.asarray(i, dtype=np.int64)).to(queries.device)
             return dist, idx
         ds, js = [], []
+        n_cand = min(self.points.shape[0], k + RERANK_MARGIN)
+        if self._centred is None:
+            self._centre = self.points.mean(dim=0)
+            self._centred = self.points - self._centre
         for start in range(0, queries.shape[0], self.chunk):
-            block = torch.cdist(queries[start : start + self.chunk], self.points)  # (m, N)
-            d, j = block.topk(k, dim=1, largest=False)
+            q = queries[start : start + self.chunk]
+            # candidates by the fast matrix-product form |x|^2 + |y|^2 - 2 x.y on centred
+            # coordinates (far from the origin its rounding swamps the distances), which can
+            # still swap close neighbours in float32; their exact distances decide the order
+            _, cand = torch.cdist(q - self._centre, self._centred).topk(n_cand, dim=1, largest=False)  # (m, k')
+            exact = (q[:, None, :] - self.points[cand]).norm(dim=-1)  # (m, k')
+            d, order = exact.topk(k, dim=1, largest=False)
             ds.append(d)
-            js.append(j)
+            js.append(cand.gather(1, order))
         dist, idx = torch.cat(ds), torch.cat(js)
         far = dist > max_distance
         dist = dist.masked_fill(far, float("inf"))
