@@ -29,3 +29,34 @@ class TestResult:
         r = _Toy(torch.tensor([1.0]), torch.tensor([True]), 1.0, {"a": torch.tensor([1])})
         moved = r.to("cpu")
         assert moved.normal.device.type == "cpu" and moved is not r and moved.extra["a"].device.type == "cpu"
+
+
+class TestOnInputDevice:
+    def test_result_follows_the_input(self):
+        from torchsym.core.results import on_input_device
+
+        @on_input_device
+        def solve(x, scale=1.0):
+            """Doc."""
+            x = x.to("cpu") if x.device.type != "meta" else torch.ones(2)  # a CPU-only stage
+            return _Toy(x * scale, torch.tensor([True]), 1.0, {"a": torch.tensor([1])})
+
+        assert solve.__doc__ == "Doc." and "scale" in str(__import__("inspect").signature(solve))
+        cpu = solve(torch.ones(2))
+        assert cpu.normal.device.type == "cpu"
+        moved = solve(torch.ones(2, device="meta"), scale=2.0)
+        assert moved.normal.device.type == "meta" and moved.extra["a"].device.type == "meta"
+
+    def test_mesh_input(self):
+        from types import SimpleNamespace
+
+        from torchsym.core.results import on_input_device
+        from torchsym.mesh.synthetic import icosphere
+
+        @on_input_device
+        def solve(mesh):
+            return _Toy(torch.ones(1), torch.tensor([True]), 1.0, {})
+
+        assert solve(icosphere(1)).normal.device.type == "cpu"
+        # anything with a vertices tensor counts as a mesh (a Mesh validates, which meta tensors cannot)
+        assert solve(SimpleNamespace(vertices=torch.ones(3, 3, device="meta"))).normal.device.type == "meta"

@@ -9,15 +9,19 @@ moves every tensor. Subclasses document each field with its shape and may overri
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import torch
 
-__all__ = ["Result", "to_jsonable"]
+__all__ = ["Result", "on_input_device", "to_jsonable"]
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 
 def to_jsonable(value: Any) -> Any:
@@ -83,7 +87,7 @@ class Result:
             Path(path).write_text(text)
         return text
 
-    def to(self, device: torch.device | str) -> "Result":
+    def to(self, device: torch.device | str) -> Result:
         """A copy with every tensor moved to ``device``."""
         changes = {f.name: _move(getattr(self, f.name), device) for f in dataclasses.fields(self)}
         return dataclasses.replace(self, **changes)
@@ -94,3 +98,30 @@ class Result:
         The base class writes nothing; each family of results overrides it.
         """
         return []
+
+
+def _device_of(data: Any) -> torch.device | None:
+    if isinstance(data, torch.Tensor):
+        return data.device
+    vertices = getattr(data, "vertices", None)  # a Mesh
+    return vertices.device if isinstance(vertices, torch.Tensor) else None
+
+
+def on_input_device(fn: F) -> F:
+    """Decorator: the result of ``fn(data, ...)`` comes back on the device of ``data``.
+
+    For solvers whose combinatorial stages (kd-trees, assignment, integer programs, OpenCV)
+    run on the CPU whatever the input's device: their tensor stages (kornia's SIFT and
+    Harris, say) still run where the input lies, and the caller gets the result where the
+    input was, as from a solver that runs on the device throughout.
+    """
+
+    @functools.wraps(fn)
+    def wrapper(data: Any, *args: Any, **kwargs: Any) -> Any:
+        out = fn(data, *args, **kwargs)
+        device = _device_of(data)
+        if device is not None and device.type != "cpu" and isinstance(out, Result):
+            out = out.to(device)
+        return out
+
+    return wrapper  # type: ignore[return-value]

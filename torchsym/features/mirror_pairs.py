@@ -68,11 +68,11 @@ def mutual_knn_pairs(dist: torch.Tensor, k1: int) -> torch.Tensor:
     k1 = check_int(k1, "k1", minimum=1)
     n = dist.shape[0]
     if n < 2:
-        return torch.zeros(0, 2, dtype=torch.int64)
+        return torch.zeros(0, 2, dtype=torch.int64, device=dist.device)
     k = min(k1, n - 1)
     vals, idx = dist.topk(k, dim=1, largest=False)  # (N, k)
-    knn = torch.zeros(n, n, dtype=torch.bool)
-    rows = torch.arange(n)[:, None].expand(-1, k)
+    knn = torch.zeros(n, n, dtype=torch.bool, device=dist.device)
+    rows = torch.arange(n, device=dist.device)[:, None].expand(-1, k)
     knn[rows[torch.isfinite(vals)], idx[torch.isfinite(vals)]] = True
     mutual = knn & knn.T
     return torch.triu(mutual, diagonal=1).nonzero()

@@ -55,6 +55,7 @@ from torch import nn
 from torchsym.core.checks import check_image, check_in_range, check_int, check_positive
 from torchsym.core.random import random_subset
 from torchsym.core.registry import register_solver
+from torchsym.core.results import on_input_device
 from torchsym.errors import InputShapeError, InputValueError, SolverError
 from torchsym.image.axes import (
     EDGE_NOISE,
@@ -344,6 +345,7 @@ def _check_settings(*, edges, sigma, low_threshold, high_threshold, segment_leng
     check_int(num_features, "num_features", minimum=1)
 
 
+@on_input_device
 def boundary_clique_axes(
     image: torch.Tensor,
     *,
@@ -533,7 +535,7 @@ def boundary_clique_axes(
     np.fill_diagonal(adj, False)
     stages["graph"] = time.perf_counter() - tic
     tic = time.perf_counter()
-    gray = img[0].float().mean(0).numpy()
+    gray = img[0].float().mean(0).cpu().numpy()
     grads = mirror_gradients(gray) if score == "gradient" else None
     noise = EDGE_NOISE * gradient_noise(*grads) if grads is not None else 0.0
     full_sums32 = full_sums.astype(np.float32)
@@ -581,7 +583,7 @@ def boundary_clique_axes(
     stages["cliques"] = time.perf_counter() - tic
     if sift_candidates:  # score == "gradient" (checked): every axis has an extent
         tic = time.perf_counter()
-        sift_pairs = mirror_sift_pairs(img, num_features=num_features)[0].numpy()  # (P, 4)
+        sift_pairs = mirror_sift_pairs(img, num_features=num_features)[0].cpu().numpy()  # (P, 4)
         n_sift = 0
         for line, run in mirror_pair_candidates(sift_pairs, h, w):
             ev = axis_evidence(*grads, line, sift_pairs[run], min_half_width=segment_length / 3,

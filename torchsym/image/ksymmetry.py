@@ -44,6 +44,7 @@ from torch import nn
 
 from torchsym.core.checks import check_image, check_in_range, check_int, check_positive
 from torchsym.core.registry import register_solver
+from torchsym.core.results import on_input_device
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.features.mirror_pairs import (
     choose_k1,
@@ -170,15 +171,15 @@ def mirror_sift_pairs(
         min_pair_distance: keypoints closer than this (pixels) are not paired.
 
     Returns:
-        ``pairs (P, 4)`` float64 ``x1, y1, x2, y2`` in pixels and the ``k1`` used (0 when
-        there were fewer than two keypoints).
+        ``pairs (P, 4)`` float64 ``x1, y1, x2, y2`` in pixels, on the image's device, and
+        the ``k1`` used (0 when there were fewer than two keypoints).
     """
     min_pair_distance = check_positive(min_pair_distance, "min_pair_distance", allow_zero=True)
     if k1 is not None:
         k1 = check_int(k1, "k1", minimum=1)
     feats = detect_sift(image, num_features=num_features)
     if len(feats) < 2:
-        return torch.zeros(0, 4, dtype=torch.float64), 0
+        return torch.zeros(0, 4, dtype=torch.float64, device=feats.points.device), 0
     dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)
     if k1 is None:
         k1 = choose_k1(dist)
@@ -318,6 +319,7 @@ def mirror_pair_candidates(
     return out
 
 
+@on_input_device
 def ksymmetry_axes(
     image: torch.Tensor,
     *,
@@ -406,6 +408,8 @@ def ksymmetry_axes(
     h, w = int(img.shape[-2]), int(img.shape[-1])
     t0 = time.perf_counter()
     pairs, k1 = mirror_sift_pairs(img, num_features=num_features, k1=k1, min_pair_distance=min_pair_distance)  # (P, 4)
+    # SIFT ran on the image's device; the clustering and the evidence run on the CPU
+    pairs, img = pairs.cpu(), img.cpu()
     if pairs.shape[0] == 0 and k1 == 0:
         return empty_result(h, w, "ksymmetry", k1=None, reason="fewer than 2 keypoints")  # k1 never used
     if pairs.shape[0] < min_support:

@@ -31,7 +31,7 @@ from torch import nn
 from torchsym.core.checks import check_int, check_positive
 from torchsym.core.random import make_generator, numpy_rng
 from torchsym.core.registry import register_solver
-from torchsym.core.results import Result
+from torchsym.core.results import Result, on_input_device
 from torchsym.errors import InputValueError
 from torchsym.mesh.correction import correct_eigenfunctions
 from torchsym.mesh.geodesic import geodesic_distances, thin_points
@@ -408,6 +408,7 @@ def _sign_hypotheses(
     return best, base, best_q
 
 
+@on_input_device
 def intrinsic_symmetry(
     mesh: Mesh,
     *,

@@ -84,12 +84,12 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
     Returns:
         A :class:`HoleFilling`.
     """
-    import pymeshlab
-
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)
     if boundary_loops(faces, vertices.shape[0]) == 0:
         return HoleFilling(faces, 0)
+    import pymeshlab  # only open meshes need it
+
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(vertices), face_matrix=np.ascontiguousarray(faces, dtype=np.int32)))
     try:

@@ -15,7 +15,7 @@ from torch import nn
 from torchsym.core.checks import check_image, check_in_range, check_int, check_positive
 from torchsym.core.random import DEFAULT_SEED, make_generator, random_subset
 from torchsym.core.registry import register_solver
-from torchsym.core.results import Result
+from torchsym.core.results import Result, on_input_device
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.pointset.pointsymm import point_symm
 
@@ -100,6 +100,7 @@ def _inliers(corners: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: flo
     return dist < threshold, idx
 
 
+@on_input_device
 def pointsymm_image(
     image: Any,
     *,
@@ -141,7 +142,7 @@ def pointsymm_image(
     """
     _check_settings(n_corners, harris_k, ransac_iters, sample_fraction, inlier_threshold, match_fraction)
     img = check_image(image, "image", min_size=3)
-    corners_t = harris_corners(img, n_corners, harris_k)  # (K, 2)
+    corners_t = harris_corners(img, n_corners, harris_k).cpu()  # (K, 2): Harris on the image's device
     k = corners_t.shape[0]
     if k < 4:
         raise InputValueError(f"image: expected at least 4 Harris corners, found {k}")
