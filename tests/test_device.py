@@ -150,11 +150,19 @@ class TestGeometry:
         )
 
 
-class TestPointCloud:
-    @pytest.fixture(scope="class")
-    def cloud(self):
-        return torchsym.planted_symmetric_cloud(3000, generator=3)
+@pytest.fixture(scope="module")
+def cloud():
+    return torchsym.planted_symmetric_cloud(3000, generator=3)
 
+
+@pytest.fixture(scope="module")
+def image():
+    from torchsym.image.synthetic import mirrored_objects_image
+
+    return mirrored_objects_image(1, height=240, width=240, generator=gen(0))
+
+
+class TestPointCloud:
     def test_plane_on_device(self, cloud):
         cpu = torchsym.detect_reflection_plane(cloud.points, generator=0)
         gpu = torchsym.detect_reflection_plane(cloud.points.to(CUDA), generator=0)
@@ -210,12 +218,6 @@ class TestPointSet:
 
 
 class TestImages:
-    @pytest.fixture(scope="class")
-    def image(self):
-        from torchsym.image.synthetic import mirrored_objects_image
-
-        return mirrored_objects_image(1, height=240, width=240, generator=gen(0))
-
     @pytest.mark.parametrize("fn", ["ksymmetry_axes", "boundary_clique_axes"])
     def test_axes_on_device(self, image, fn):
         import cv2
