@@ -196,7 +196,7 @@ def point_symm(
     match_fraction: float = 1.0,
     assignment: str = "auto",
     n_neighbors: int = 10,
-    exact_max_points: int = 2000,
+    exact_max_points: int = 500,
     n_starts: int = 4,
     n_scan: int = 200,
     n_scan_starts: int = 4,
@@ -257,6 +257,10 @@ def point_symm(
         assignment: ``"auto"``, ``"exact"`` or ``"sparse"`` (see above).
         n_neighbors: candidate mirrors per point of the sparse assignment.
         exact_max_points: largest ``N`` solved by the exact assignment under ``"auto"``.
+            500 (was 2,000): on noisy 3-D sets of 500 to 2,000 points the sparse solver
+            returned the same planes and scores, 2-5x faster at ``N >= 1,000`` (``N =
+            2,000``, ``sigma^2 = 1e-4``: 12 s instead of 64 s; ``N = 1,000``, ``1e-3``: 2.6
+            s instead of 5.7 s), and no slower without noise.
         n_starts: most starting planes (see above). The thesis starts once, from the median
             plane (``n_starts=1``); the default 4 makes the search far less likely to end in
             a wrong plane under noise (at ``sigma^2 = 1e-3``, 2 failures in 15 sets instead
@@ -420,7 +424,7 @@ class PointSymm(nn.Module):
         match_fraction: float = 1.0,
         assignment: str = "auto",
         n_neighbors: int = 10,
-        exact_max_points: int = 2000,
+        exact_max_points: int = 500,
         n_starts: int = 4,
         n_scan: int = 200,
         n_scan_starts: int = 4,
