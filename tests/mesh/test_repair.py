@@ -7,7 +7,7 @@ import torch
 from torchsym.errors import InputValueError
 from torchsym.mesh.intrinsic import intrinsic_symmetry
 from torchsym.mesh.operators import edge_face_counts
-from torchsym.mesh.repair import HoleFilling, boundary_loops, close_holes
+from torchsym.mesh.repair import HoleFilling, _loop_spans, boundary_loops, close_holes
 from torchsym.mesh.synthetic import icosphere, punch_holes
 from torchsym.metrics.mesh import correspondence_rate
 
@@ -62,6 +62,32 @@ class TestCloseHoles:
         # with a larger limit it is covered
         filling = close_holes(v, upper, max_area=1.0)
         assert filling.holes_closed == 1 and boundary_loops(filling.faces, v.shape[0]) == 0
+
+    def test_large_outline_skips_meshlab(self, monkeypatch):
+        # the rim's vector area (pi, half the hemisphere's area) bounds any patch from below,
+        # so the rim is left open without asking MeshLab
+        import sys
+
+        s = icosphere(3)
+        v, f = s.vertices.numpy(), s.faces.numpy()
+        upper = f[(v[f][:, :, 2] > -1e-9).all(axis=1)]
+        span, simple = _loop_spans(v, upper)
+        assert simple.tolist() == [True] and abs(span[0] - np.pi) < 0.05 * np.pi
+        monkeypatch.setitem(sys.modules, "pymeshlab", None)  # importing it now fails
+        filling = close_holes(v, upper)
+        assert filling.holes_closed == 0 and "1 boundary loops left open" in filling.notes[0]
+
+    def test_vector_area_bounds_the_patch(self):
+        # each hole's patch is at least as large as the hole's vector area
+        from torchsym.mesh.operators import face_areas
+
+        v, f = _sphere_with_holes([0, 300, 500])
+        span, simple = _loop_spans(v, f)
+        filling = close_holes(v, f, max_area=1.0)
+        assert simple.all() and filling.holes_closed == 3
+        patches = face_areas(v, filling.faces[f.shape[0] :])
+        assert 0 < span.sum() <= patches.sum() + 1e-12
+        assert span.sum() > 0.8 * patches.sum()  # small, nearly flat holes: close to it
 
     def test_small_hole_kept_beside_an_outline(self):
         # an open hemisphere with a small hole: the hole is covered, the rim left open

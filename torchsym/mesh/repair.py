@@ -54,6 +54,34 @@ def boundary_loops(faces: np.ndarray, n_vertices: int) -> int:
     return int(border.shape[0] - used.size + np.unique(labels[used]).size)
 
 
+def _loop_spans(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The least area that covering each boundary component needs, and whether it is one loop.
+
+    For a closed curve, any surface it bounds has area at least the length of the curve's
+    vector area ``1/2 sum p_a x p_b`` over its directed edges (the integral of the unit
+    normal over the surface, whose length is at most the surface's area). Each boundary
+    edge is taken in the direction of its one triangle, so the loop is consistently
+    oriented and its edges need no ordering.
+
+    Returns:
+        ``span (C,)`` the length of each component's vector area, and ``simple (C,)``
+        whether the component is a single loop (every vertex on two boundary edges).
+    """
+    n = vertices.shape[0]
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])  # (3F, 2)
+    key = directed.min(axis=1) * n + directed.max(axis=1)  # one int64 per undirected edge
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    border = directed[counts[inverse] == 1]  # (B, 2) each in its triangle's direction
+    graph = sp.coo_matrix((np.ones(border.shape[0]), (border[:, 0], border[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    used, comp = np.unique(labels[border[:, 0]], return_inverse=True)
+    cross = 0.5 * np.cross(vertices[border[:, 0]], vertices[border[:, 1]])  # (B, 3)
+    span = np.stack([np.bincount(comp, weights=cross[:, i], minlength=used.size) for i in range(3)], 1)
+    degree = np.bincount(border.ravel(), minlength=n)
+    simple = np.bincount(comp, weights=(degree[border[:, 0]] != 2).astype(float), minlength=used.size) == 0
+    return np.linalg.norm(span, axis=1), simple
+
+
 def _patches(new: np.ndarray) -> np.ndarray:
     """Label ``(N,)`` of the patch of each new triangle: triangles joined through shared edges."""
     edges = np.sort(np.concatenate([new[:, [0, 1]], new[:, [1, 2]], new[:, [2, 0]]]), axis=1)  # (3N, 2)
@@ -66,6 +94,13 @@ def _patches(new: np.ndarray) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
+def _large_note(count: int, max_area: float) -> str:
+    return (
+        f"{count} boundary loops left open: covering them would add more than {max_area:g} of the "
+        "area (the outline of an open surface, not a hole)"
+    )
+
+
 def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.1) -> HoleFilling:
     """Cover the holes of ``(vertices, faces)`` with new triangles between boundary vertices.
 
@@ -74,7 +109,9 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
     ``notes``: new triangles of zero area (collinear boundary vertices; the hole stays
     partly open), a patch larger than ``max_area`` times the mesh's area (the outline of
     an open surface, a panel or a mask, not a hole: covering it would glue a second face
-    onto the surface), and a patch that would make an edge non-manifold.
+    onto the surface), and a patch that would make an edge non-manifold. When every
+    boundary is a single loop whose vector area alone exceeds ``max_area`` (a lower bound
+    of any patch's area), MeshLab is not called: no patch could be kept.
 
     Args:
         vertices: ``(V, 3)`` positions.
@@ -88,6 +125,10 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
     faces = np.asarray(faces, dtype=np.int64)
     if boundary_loops(faces, vertices.shape[0]) == 0:
         return HoleFilling(faces, 0)
+    span, simple = _loop_spans(vertices, faces)
+    limit = max_area * float(face_areas(vertices, faces).sum())
+    if simple.all() and (span > limit).all():  # no patch could be kept: MeshLab need not run
+        return HoleFilling(faces, 0, (_large_note(span.size, max_area),))
     import pymeshlab  # only open meshes need it
 
     ms = pymeshlab.MeshSet()
@@ -113,10 +154,7 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
     patch_area = np.bincount(patch, weights=area)  # (P,)
     large = patch_area > max_area * float(old_area.sum())
     if large.any():
-        notes.append(
-            f"{int(large.sum())} boundary loops left open: covering them would add more than {max_area:g} of the "
-            "area (the outline of an open surface, not a hole)"
-        )
+        notes.append(_large_note(int(large.sum()), max_area))
     keep = ~large[patch]
     edges, counts = edge_face_counts(np.concatenate([faces, new[keep]]))
     if (counts > 2).any():  # patches that would make an edge non-manifold are left out
