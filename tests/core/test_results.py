@@ -1,6 +1,7 @@
 import dataclasses
 import json
 
+import pytest
 import torch
 
 from torchsym.core.results import Result
@@ -46,6 +47,26 @@ class TestOnInputDevice:
         assert cpu.normal.device.type == "cpu"
         moved = solve(torch.ones(2, device="meta"), scale=2.0)
         assert moved.normal.device.type == "meta" and moved.extra["a"].device.type == "meta"
+        assert solve(x=torch.ones(2, device="meta")).normal.device.type == "meta"  # by keyword
+
+    @pytest.mark.parametrize(
+        "fn", ["ksymmetry_axes", "boundary_clique_axes", "pointsymm_image", "intrinsic_symmetry"]
+    )
+    def test_solvers_return_on_the_input_device(self, fn):
+        import inspect
+
+        import torchsym
+
+        solver = getattr(torchsym, fn)
+        assert getattr(solver, "__wrapped__", None) is not None  # decorated with on_input_device
+        assert next(iter(inspect.signature(solver).parameters)) in ("image", "mesh")
+
+    def test_solver_called_by_keyword(self):
+        import torchsym
+
+        img = torch.zeros(1, 32, 32)
+        img[:, 8:24, 10:22] = 1.0
+        assert isinstance(torchsym.ksymmetry_axes(image=img), Result)
 
     def test_mesh_input(self):
         from types import SimpleNamespace

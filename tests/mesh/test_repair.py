@@ -77,6 +77,48 @@ class TestCloseHoles:
         filling = close_holes(v, upper)
         assert filling.holes_closed == 0 and "1 boundary loops left open" in filling.notes[0]
 
+    def test_small_hole_touching_a_large_outline_is_closed(self):
+        # a hole whose outline meets the hemisphere's rim at one vertex: one boundary
+        # component, not a single loop, whose summed vector area exceeds the limit; the
+        # shortcut must not skip MeshLab there, and the small hole is covered
+        s = icosphere(3)
+        v, f = s.vertices.numpy(), s.faces.numpy()
+        upper = f[(v[f][:, :, 2] > -1e-9).all(axis=1)]
+        edges, counts = edge_face_counts(upper)
+        on_rim = np.zeros(v.shape[0], dtype=bool)
+        on_rim[np.unique(edges[counts == 1])] = True
+
+        def ring(u):
+            return np.setdiff1d(upper[(upper == u).any(axis=1)], [u])
+
+        u, w = next(
+            (u, w)
+            for u in np.unique(upper)
+            if not on_rim[ring(u)].any() and not on_rim[u]
+            for w in ring(u)
+            if on_rim[ring(w)].sum() == 1
+        )
+        holed = upper[~np.isin(upper, [u, w]).any(axis=1)]
+        span, simple = _loop_spans(v, holed)
+        assert boundary_loops(holed, v.shape[0]) == 2 and simple.tolist() == [False] and span[0] > 1.0
+        assert close_holes(v, holed).holes_closed == 1
+
+    @pytest.mark.parametrize("shift", [0.0, 100.0, 1e8])
+    def test_flipped_rim_triangle_and_far_coordinates(self, shift):
+        # a small hole with one flipped triangle on its rim, anywhere in space, is closed
+        s = icosphere(3)
+        v, f0 = s.vertices.numpy() + np.array([shift, 0.0, 0.0]), s.faces.numpy()
+        rim = np.setdiff1d(f0[(f0 == 0).any(axis=1)], [0])
+        f = f0[~(f0 == 0).any(axis=1)].copy()
+        j = np.flatnonzero(np.isin(f, rim).sum(axis=1) == 2)[0]
+        f[j] = f[j][::-1]
+        assert _loop_spans(v, f)[1].tolist() == [False]
+        assert close_holes(v, f).holes_closed == 1
+        if shift:  # a consistently oriented hole far away: its vector area is still small
+            g = f0[~(f0 == 0).any(axis=1)]
+            span, simple = _loop_spans(v, g)
+            assert simple.all() and span[0] < 0.05
+
     def test_vector_area_bounds_the_patch(self):
         # each hole's patch is at least as large as the hole's vector area
         from torchsym.mesh.operators import face_areas

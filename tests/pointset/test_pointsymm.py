@@ -272,3 +272,15 @@ class TestPointSymmModule:
         pipe = torchsym.build_pipeline(Path(__file__).resolve().parents[2] / "configs" / "pointset_pointsymm.yaml")
         res = pipe(planted(20, 3, 16).points)
         assert isinstance(res, PointSymmResult)
+
+
+def test_auto_assignment_exact_for_partial_sets():
+    # full matching: sparse above exact_max_points; with a cardinality limit, which the sparse
+    # solver only approximates, exact up to four times as many points
+    s = planted(600, 3, 5)
+    assert point_symm(s.points, generator=gen(0)).assignment == "sparse"
+    cut = s.points[s.points[:, 0] < 0.9 * float(s.points[:, 0].max())]
+    assert 500 < cut.shape[0] <= 2000
+    res = point_symm(cut, match_fraction=0.85, generator=gen(0))
+    assert res.assignment == "exact"
+    assert point_symm(cut, match_fraction=0.85, exact_max_points=100, generator=gen(0)).assignment == "sparse"

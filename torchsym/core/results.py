@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import json
 import math
 from collections.abc import Callable
@@ -116,9 +117,12 @@ def on_input_device(fn: F) -> F:
     input was, as from a solver that runs on the device throughout.
     """
 
+    first = next(iter(inspect.signature(fn).parameters))  # the input's name, e.g. image or mesh
+
     @functools.wraps(fn)
-    def wrapper(data: Any, *args: Any, **kwargs: Any) -> Any:
-        out = fn(data, *args, **kwargs)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        out = fn(*args, **kwargs)
+        data = args[0] if args else kwargs.get(first)
         device = _device_of(data)
         if device is not None and device.type != "cpu" and isinstance(out, Result):
             out = out.to(device)

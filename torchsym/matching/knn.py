@@ -2,9 +2,11 @@
 
 On a CPU, a kd-tree answers a query in O(log n) and is about 50x faster than a dense
 distance matrix. On a GPU, brute force keeps small problems on the device: chunked
-``cdist`` in its matrix-product form picks ``k + 4`` candidates and their exact
-differences order them (the product form alone swapped close neighbours in 0.02-0.2 % of
-float32 queries; the exact form of ``cdist`` is 20-60x slower). Its cost grows with
+``cdist`` in its matrix-product form, in float64 on centred coordinates, picks ``k + 4``
+candidates and their exact differences order them (the product form alone, in float32,
+swapped close neighbours in 0.02-0.2 % of queries on a unit cube and returned a wrong
+neighbour for most queries on a cloud 1 km wide; the exact form of ``cdist`` is 20-60x
+slower). Its cost grows with
 queries x points, so past ``brute_force_max`` distances a query copies the points to the
 host and asks a kd-tree built there once. On an H100 beside 2 CPU threads the two cross
 near 1e9 distances (``benchmarks/results/device.md``).
@@ -57,6 +59,7 @@ class KNNIndex:
         self.method = method
         self.on_cpu = points.device.type == "cpu"
         self._tree = self._build() if method == "tree" else None
+        self._points64: torch.Tensor | None = None
         self._centre: torch.Tensor | None = None
         self._centred: torch.Tensor | None = None
 
@@ -71,14 +74,17 @@ class KNNIndex:
         Args:
             queries: ``(M, D)`` query points.
             k: neighbours per query.
-            max_distance: neighbours farther than this are not searched for: their
-                distance is ``inf`` and their index ``N`` (one past the last point). Far
+            max_distance: neighbours at this distance or farther are not searched for:
+                their distance is ``inf`` and their index ``N`` (one past the last point). Far
                 queries are the slow ones, so a bound speeds up scoring with kernels that
                 ignore large residuals anyway.
 
         Returns:
-            ``dist (M,)`` and ``index (M,)`` int64 for ``k == 1``, else ``(M, k)`` each.
+            ``dist (M,)`` in the queries' floating dtype (float64 for integer queries) and ``index (M,)`` int64 for ``k == 1``, else
+            ``(M, k)`` each; with fewer than ``k`` points the missing neighbours are ``inf``
+            and ``N``, as from the kd-tree.
         """
+        out_dtype = queries.dtype if queries.is_floating_point() else torch.float64
         big = queries.shape[0] * self.points.shape[0] > self.brute_force_max
         if self.method == "tree" or (self.method == "auto" and big):
             if self._tree is None:
@@ -88,28 +94,33 @@ class KNNIndex:
             d, i = self._tree.query(
                 queries.detach().to("cpu", torch.float64).numpy(), k=k, workers=workers, distance_upper_bound=max_distance
             )
-            dist = torch.from_numpy(np.asarray(d)).to(queries.device, queries.dtype)
+            dist = torch.from_numpy(np.asarray(d)).to(queries.device, out_dtype)
             idx = torch.from_numpy(np.asarray(i, dtype=np.int64)).to(queries.device)
             return dist, idx
-        ds, js = [], []
-        n_cand = min(self.points.shape[0], k + RERANK_MARGIN)
-        if self._centred is None:
-            self._centre = self.points.mean(dim=0)
-            self._centred = self.points - self._centre
-        for start in range(0, queries.shape[0], self.chunk):
-            q = queries[start : start + self.chunk]
+        n_pts, m = self.points.shape[0], queries.shape[0]
+        dist = torch.full((m, k), float("inf"), dtype=out_dtype, device=queries.device)
+        idx = torch.full((m, k), n_pts, dtype=torch.int64, device=queries.device)
+        if self._points64 is None:
+            # float64 throughout: the product form's rounding grows with the cloud's extent
+            # squared, and in float32 it swamps the spacing of a wide cloud (a scan 1 km across)
+            self._points64 = self.points.detach().to(torch.float64)
+            self._centre = self._points64.mean(dim=0)
+            self._centred = self._points64 - self._centre
+        k_eff = min(k, n_pts)
+        n_cand = min(n_pts, k + RERANK_MARGIN)
+        for start in range(0, m, self.chunk):
+            q = queries[start : start + self.chunk].detach().to(torch.float64)
             # candidates by the fast matrix-product form |x|^2 + |y|^2 - 2 x.y on centred
-            # coordinates (far from the origin its rounding swamps the distances), which can
-            # still swap close neighbours in float32; their exact distances decide the order
-            _, cand = torch.cdist(q - self._centre, self._centred).topk(n_cand, dim=1, largest=False)  # (m, k')
-            exact = (q[:, None, :] - self.points[cand]).norm(dim=-1)  # (m, k')
-            d, order = exact.topk(k, dim=1, largest=False)
-            ds.append(d)
-            js.append(cand.gather(1, order))
-        dist, idx = torch.cat(ds), torch.cat(js)
-        far = dist > max_distance
+            # coordinates, which can still swap near-equidistant neighbours; their exact
+            # distances decide the order
+            _, cand = torch.cdist(q - self._centre, self._centred).topk(n_cand, dim=1, largest=False)  # (m', k')
+            exact = (q[:, None, :] - self._points64[cand]).norm(dim=-1)  # (m', k')
+            d, order = exact.topk(k_eff, dim=1, largest=False)
+            dist[start : start + q.shape[0], :k_eff] = d.to(out_dtype)
+            idx[start : start + q.shape[0], :k_eff] = cand.gather(1, order)
+        far = dist >= max_distance  # as the kd-tree: a neighbour at max_distance is not returned
         dist = dist.masked_fill(far, float("inf"))
-        idx = idx.masked_fill(far, self.points.shape[0])
+        idx = idx.masked_fill(far, n_pts)
         return (dist[:, 0], idx[:, 0]) if k == 1 else (dist, idx)
 
 

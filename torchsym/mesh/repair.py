@@ -65,9 +65,11 @@ def _loop_spans(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
 
     Returns:
         ``span (C,)`` the length of each component's vector area, and ``simple (C,)``
-        whether the component is a single loop (every vertex on two boundary edges).
+        whether the component is a single, consistently oriented loop (every vertex
+        starts one boundary edge and ends one); ``span`` bounds a patch only there.
     """
     n = vertices.shape[0]
+    faces = np.asarray(faces, dtype=np.int64)
     directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])  # (3F, 2)
     key = directed.min(axis=1) * n + directed.max(axis=1)  # one int64 per undirected edge
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
@@ -75,10 +77,19 @@ def _loop_spans(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
     graph = sp.coo_matrix((np.ones(border.shape[0]), (border[:, 0], border[:, 1])), shape=(n, n))
     _, labels = connected_components(graph, directed=False)
     used, comp = np.unique(labels[border[:, 0]], return_inverse=True)
-    cross = 0.5 * np.cross(vertices[border[:, 0]], vertices[border[:, 1]])  # (B, 3)
+    # cross products about a point of each component: the same sum for a closed chain, without
+    # the cancellation of large coordinates far from the origin
+    ref = np.zeros((used.size, 3))
+    ref[comp] = vertices[border[:, 0]]  # any one vertex of each component
+    a, b = vertices[border[:, 0]] - ref[comp], vertices[border[:, 1]] - ref[comp]
+    cross = 0.5 * np.cross(a, b)  # (B, 3)
     span = np.stack([np.bincount(comp, weights=cross[:, i], minlength=used.size) for i in range(3)], 1)
-    degree = np.bincount(border.ravel(), minlength=n)
-    simple = np.bincount(comp, weights=(degree[border[:, 0]] != 2).astype(float), minlength=used.size) == 0
+    # a single, consistently oriented loop: every vertex starts one border edge and ends one
+    # (a flipped triangle on the rim reverses an edge, and the sum is then no vector area)
+    out_deg = np.bincount(border[:, 0], minlength=n)
+    in_deg = np.bincount(border[:, 1], minlength=n)
+    bad = (out_deg[border[:, 0]] != 1) | (in_deg[border[:, 0]] != 1) | (out_deg[border[:, 1]] != 1) | (in_deg[border[:, 1]] != 1)
+    simple = np.bincount(comp, weights=bad.astype(float), minlength=used.size) == 0
     return np.linalg.norm(span, axis=1), simple
 
 
