@@ -164,9 +164,15 @@ def evaluate(items, use_pyfm: bool) -> dict:
         ours = correspondence_rate(mesh, res.map, ground_truth=gt).rate
         row = {"name": name, "vertices": mesh.num_vertices, "ours": ours, "time": res.timings["total"],
                "eigen": res.timings["eigen"], "pairs": int(res.pairs.shape[0]), "hypothesis": res.hypothesis}
-        # ablation: the same solver without the orientation-reversing hypothesis
-        pairs_only = intrinsic_symmetry(mesh, orientation_hypothesis=False)
+        # ablation: the same solver without the orientation-reversing and extrinsic hypotheses
+        pairs_only = intrinsic_symmetry(mesh, orientation_hypothesis=False, extrinsic_hypothesis=False)
         row["pairs_only"] = correspondence_rate(mesh, pairs_only.map, ground_truth=gt).rate
+        # ablation: without the extrinsic hypothesis (the same map where it was not chosen)
+        row["no_extrinsic"] = ours
+        if res.hypothesis == "extrinsic":
+            row["no_extrinsic"] = correspondence_rate(
+                mesh, intrinsic_symmetry(mesh, extrinsic_hypothesis=False).map, ground_truth=gt
+            ).rate
         # ablation: without closing the holes first (the same map on a closed mesh)
         row["holes_closed"] = res.holes_closed
         row["no_fill"] = ours
@@ -189,6 +195,8 @@ def evaluate(items, use_pyfm: bool) -> dict:
         "no_fill_rate": float(np.mean([r["no_fill"] for r in rows])) if rows else float("nan"),
         "holes_closed": sum(r["holes_closed"] > 0 for r in rows),
         "orientation_chosen": sum(r["hypothesis"] == "orientation" for r in rows),
+        "no_extrinsic_rate": float(np.mean([r["no_extrinsic"] for r in rows])) if rows else float("nan"),
+        "extrinsic_chosen": sum(r["hypothesis"] == "extrinsic" for r in rows),
         "failed": sum("distortion_ours" in r for r in rows),
         "failed_truth_less_isometric": sum(
             r["distortion_truth"] > r["distortion_ours"] and r["near_self"] < 0.6 for r in rows if "near_self" in r
@@ -239,8 +247,10 @@ def render(results: dict, timing: dict) -> str:
             "shape); mesh rate: share of meshes with a rate above 75 %. Holes: 3 geodesic discs "
             "removing 10 % of the area at random (asymmetric) places, largest component kept. Peer: "
             "pyFM orientation-reversing self-map on the same eigenbasis (k = 13) and HKS descriptors "
-            "(50 scales). Ablations: torchsym without the orientation-reversing hypothesis (only the "
-            "thesis's pairings), and how often that hypothesis was chosen; torchsym without closing "
+            "(50 scales). Ablations: torchsym without the orientation-reversing and extrinsic hypotheses (only the "
+            "thesis's pairings), and how often the orientation-reversing one was chosen; torchsym without the "
+            "extrinsic hypothesis (the vertices' mirror plane, tried when the intrinsic ones are weak), and how "
+            "often it was chosen; torchsym without closing "
             "the holes first (`fill_holes=False`; the same run on meshes without holes), and on how "
             "many meshes holes were closed. Failed: meshes at or below "
             "75 %, and on how many of them the ground-truth map distorts geodesics more than ours "
@@ -252,10 +262,11 @@ def render(results: dict, timing: dict) -> str:
         "",
         (
             "| data set | meshes | torchsym rate % | torchsym mesh rate % | failed (truth less isometric) "
-            "| pairs only rate % | orientation chosen | without hole filling rate % (meshes filled) "
+            "| pairs only rate % | orientation chosen | without extrinsic rate % (extrinsic chosen) "
+            "| without hole filling rate % (meshes filled) "
             "| pyFM rate % | pyFM mesh rate % | torchsym median s | eigendecomposition median s | pyFM median s |"
         ),
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, res in results.items():
         s = res["summary"]
@@ -263,6 +274,7 @@ def render(results: dict, timing: dict) -> str:
             f"| {name} | {s['meshes']} | {fmt(s['ours_rate'], True)} | {fmt(s['ours_mesh_rate'], True)} | "
             f"{s.get('failed', '-')} ({s.get('failed_truth_less_isometric', '-')}) | "
             f"{fmt(s.get('pairs_only_rate', float('nan')), True)} | {s.get('orientation_chosen', '-')} | "
+            f"{fmt(s.get('no_extrinsic_rate', float('nan')), True)} ({s.get('extrinsic_chosen', '-')}) | "
             f"{fmt(s.get('no_fill_rate', float('nan')), True)} ({s.get('holes_closed', '-')}) | "
             f"{fmt(s.get('pyfm_rate', float('nan')), True)} | {fmt(s.get('pyfm_mesh_rate', float('nan')), True)} | "
             f"{fmt(s['ours_median_time'])} | {fmt(s['eigen_median_time'])} | {fmt(s.get('pyfm_median_time', float('nan')))} |"

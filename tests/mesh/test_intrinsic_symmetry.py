@@ -357,3 +357,50 @@ class TestPairingHypotheses:
             intrinsic_symmetry(mesh, pairing_hypotheses=1)
         with pytest.raises(InputValueError, match="pairing_hypotheses: expected True or False"):
             IntrinsicSymmetry(pairing_hypotheses="yes")
+
+
+class TestExtrinsicHypothesis:
+    def test_not_tried_when_the_intrinsic_map_is_strong(self, solved):
+        result, _, _ = solved
+        assert result.hypothesis != "extrinsic" and "extrinsic" not in result.timings
+
+    def test_used_when_the_intrinsic_maps_are_weak(self, blob):
+        from torchsym.mesh.synthetic import punch_holes
+
+        # holes at asymmetric places, left open: every intrinsic hypothesis fails (rate < 0.5),
+        # while the shape is still mirror symmetric across x = 0 where it is not cut
+        mesh, gt = blob
+        holed, truth = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
+        out = intrinsic_symmetry(holed, fill_holes=False)
+        assert out.hypothesis == "extrinsic" and "extrinsic" in out.timings
+        assert any("extrinsic reflection plane" in n for n in out.notes)
+        assert correspondence_rate(holed, out.map, ground_truth=truth).rate > 0.95
+        off = intrinsic_symmetry(holed, fill_holes=False, extrinsic_hypothesis=False)
+        assert off.hypothesis != "extrinsic" and "extrinsic" not in off.timings
+        assert correspondence_rate(holed, off.map, ground_truth=truth).rate < 0.5
+        # a plane whose symmetry score is below the limit is not used
+        strict = intrinsic_symmetry(holed, fill_holes=False, extrinsic_min_score=1.0)
+        assert strict.hypothesis != "extrinsic"
+
+    def test_candidate_map_and_score(self, blob):
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh.intrinsic import _extrinsic_candidate
+
+        mesh, gt = blob
+        v = mesh.vertices.numpy()
+        moved = v @ np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]]) + 3.0  # the plane need not be a coordinate one
+        evecs = np.ones((v.shape[0], 1)) / np.sqrt(v.shape[0])
+        cand, score = _extrinsic_candidate(moved, evecs, np.ones(v.shape[0]), np.zeros((0, 2), dtype=np.int64), 3000, 7)
+        assert cand.name == "extrinsic" and score > 0.9
+        image = cKDTree(cand.target).query(cand.query)[1]
+        assert (image == gt).mean() > 0.99
+
+    def test_bad_settings(self, blob):
+        mesh, _ = blob
+        with pytest.raises(InputValueError, match="extrinsic_min_score"):
+            intrinsic_symmetry(mesh, extrinsic_min_score=1.5)
+        with pytest.raises(InputValueError, match="extrinsic_hypothesis"):
+            intrinsic_symmetry(mesh, extrinsic_hypothesis="yes")  # type: ignore[arg-type]
+        with pytest.raises(InputValueError, match="extrinsic_samples"):
+            intrinsic_symmetry(mesh, extrinsic_samples=3)
