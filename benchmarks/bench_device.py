@@ -5,7 +5,7 @@ Inputs are generated in code (seeded), so the script needs no data folder:
 * reflection plane of a point cloud (:func:`torchsym.detect_reflection_plane`) on
   planted symmetric clouds of 3,000 to 300,000 points, clean and with 100 % outliers; on
   the CPU its nearest neighbours come from scipy's kd-tree, on the GPU from chunked
-  ``torch.cdist`` with exact re-ranking, or the host's kd-tree past 1e9 distances
+  ``torch.cdist`` with exact re-ranking, or the host's kd-tree past 3e8 distances
   (:class:`torchsym.matching.knn.KNNIndex`);
 * k-symmetry axes of an image (:func:`torchsym.ksymmetry_axes`): kornia's SIFT runs on the
   image's device;
@@ -158,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
     lines += [
         "",
         "Nearest neighbours on the device (float32, uniform in the unit cube): KNNIndex's brute force",
-        "(``cdist`` candidates, k + 4 of them re-ranked by exact distances) against the host's kd-tree",
+        "(``cdist`` candidates in float64, k + 4 of them re-ranked by exact distances) against the host's kd-tree",
         "(query time with the copies both ways; the tree is built once per index, `build s`).",
         "``brute (mm)`` is ``cdist``'s matrix-product form |x|^2 + |y|^2 - 2 x.y alone: as fast, but in",
         "float32 it swaps close neighbours (its `same index` column against the tree).",

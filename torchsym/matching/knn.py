@@ -9,7 +9,8 @@ neighbour for most queries on a cloud 1 km wide; the exact form of ``cdist`` is 
 slower). Its cost grows with
 queries x points, so past ``brute_force_max`` distances a query copies the points to the
 host and asks a kd-tree built there once. On an H100 beside 2 CPU threads the two cross
-near 1e9 distances (``benchmarks/results/device.md``).
+between 1e8 and 1e9 distances for one neighbour, later for more
+(``benchmarks/results/device.md``).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from torchsym.errors import InputValueError
 
 __all__ = ["KNNIndex", "mutual_nearest"]
 
-BRUTE_FORCE_MAX = 1_000_000_000  # queries x points above which a device query uses the host's kd-tree
+BRUTE_FORCE_MAX = 300_000_000  # queries x points above which a device query uses the host's kd-tree
 RERANK_MARGIN = 4  # extra brute-force candidates whose exact distances are compared
 
 
