@@ -284,3 +284,35 @@ def test_auto_assignment_exact_for_partial_sets():
     res = point_symm(cut, match_fraction=0.85, generator=gen(0))
     assert res.assignment == "exact"
     assert point_symm(cut, match_fraction=0.85, exact_max_points=100, generator=gen(0)).assignment == "sparse"
+
+
+def test_scan_runs_the_alternation_from_n_scan_starts_planes(monkeypatch):
+    # when the scan runs, the alternation starts from at most n_scan_starts scanned planes
+    # besides the pair search's starts, and normal_scan is asked for that many
+    import torchsym.pointset.pointsymm as ps
+
+    asked, runs = [], []
+    scan, alternate = ps.normal_scan, ps._alternate
+
+    def counting_scan(*args, **kwargs):
+        asked.append(kwargs["n_keep"])
+        out = scan(*args, **kwargs)
+        runs.append(("scan", len(out)))
+        return out
+
+    def counting_alternate(*args, **kwargs):
+        runs.append(("run", 1))
+        return alternate(*args, **kwargs)
+
+    monkeypatch.setattr(ps, "normal_scan", counting_scan)
+    monkeypatch.setattr(ps, "_alternate", counting_alternate)
+    s = planted(300, 3, 500, sigma2=3e-3)
+    for k in (1, 3):
+        asked.clear()
+        runs.clear()
+        point_symm(s.points, n_scan_starts=k)
+        assert asked == [k]
+        i = [kind for kind, _ in runs].index("scan")
+        n_scanned = runs[i][1]
+        assert 1 <= n_scanned <= k
+        assert sum(1 for r in runs[i + 1 :] if r[0] == "run") == n_scanned
