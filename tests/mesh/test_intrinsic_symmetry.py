@@ -108,9 +108,12 @@ class TestIntrinsicSymmetry:
         assert np.allclose(c, c.T, atol=1e-6) and np.allclose(c @ c, eye, atol=1e-6)
         # on a mesh that is only nearly symmetric, plain ZoomOut's map is no involution
         bumpy = Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
-        plain = intrinsic_symmetry(bumpy, refine_involution=False).refined_functional_map.numpy().astype(np.float64)
+        # (the intrinsic maps: on this mesh their defects are large, and the extrinsic plane
+        # would replace them; see TestExtrinsicHypothesis)
+        plain = intrinsic_symmetry(bumpy, refine_involution=False, extrinsic_hypothesis=False)
+        plain = plain.refined_functional_map.numpy().astype(np.float64)
         assert np.linalg.norm(plain @ plain - eye) > 0.1
-        fixed = intrinsic_symmetry(bumpy).refined_functional_map.numpy().astype(np.float64)
+        fixed = intrinsic_symmetry(bumpy, extrinsic_hypothesis=False).refined_functional_map.numpy().astype(np.float64)
         assert np.allclose(fixed @ fixed, eye, atol=1e-6)
         with pytest.raises(InputValueError, match="refine_involution"):
             intrinsic_symmetry(mesh, refine_involution=1)
@@ -381,6 +384,48 @@ class TestExtrinsicHypothesis:
         # a plane whose symmetry score is below the limit is not used
         strict = intrinsic_symmetry(holed, fill_holes=False, extrinsic_min_score=1.0)
         assert strict.hypothesis != "extrinsic"
+
+    def test_tried_when_the_chosen_map_has_a_large_defect(self, solved, monkeypatch):
+        import torchsym.mesh.intrinsic as intrinsic
+
+        # a finite but large functional defect also counts as weak
+        _, mesh, _ = solved
+        bumpy = Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
+        out = intrinsic_symmetry(bumpy)
+        assert out.hypothesis == "extrinsic"
+        weak = [n for n in out.notes if "extrinsic reflection plane" in n][0]
+        assert "inf" not in weak  # the intrinsic map had finite defects
+        monkeypatch.setattr(intrinsic, "_WEAK_DEFECT", 100.0)
+        assert intrinsic_symmetry(bumpy).hypothesis != "extrinsic"
+
+    def test_distortion_limit_applies(self, blob):
+        from torchsym.mesh.synthetic import punch_holes
+
+        mesh, gt = blob
+        holed, _ = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
+        out = intrinsic_symmetry(holed, fill_holes=False, max_distortion_open=1e-3)
+        assert out.hypothesis != "extrinsic"
+        assert any("did not replace it" in n for n in out.notes)
+
+    def test_flat_mesh_own_plane_is_no_map(self):
+        # the best mirror plane of a flat mesh is its own plane, whose map is the identity
+        n = 12
+        xs, ys = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+        v = np.stack([xs.ravel() * (1 + 0.5 * ys.ravel() ** 2), ys.ravel(), np.zeros(n * n)], 1)
+        faces = [[i * n + j, i * n + j + 1, i * n + j + n + 1] for i in range(n - 1) for j in range(n - 1)]
+        faces += [[i * n + j, i * n + j + n + 1, i * n + j + n] for i in range(n - 1) for j in range(n - 1)]
+        out = intrinsic_symmetry(Mesh(torch.from_numpy(v), torch.tensor(faces)), fill_holes=False)
+        assert "extrinsic" in out.timings and out.hypothesis != "extrinsic"
+
+    def test_any_seed(self, blob):
+        from torchsym.mesh.synthetic import punch_holes
+
+        mesh, gt = blob
+        holed, _ = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
+        for seed in (-1, 2**64 - 1):
+            out = intrinsic_symmetry(holed, fill_holes=False, generator=torch.Generator().manual_seed(seed))
+            assert out.hypothesis == "extrinsic"
+        assert IntrinsicSymmetry(fill_holes=False, seed=-1)(holed).hypothesis == "extrinsic"
 
     def test_candidate_map_and_score(self, blob):
         from scipy.spatial import cKDTree

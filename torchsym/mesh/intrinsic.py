@@ -118,7 +118,8 @@ class IntrinsicSymmetryResult(Result):
         feature_points: ``(d,)`` int64 HKS feature points (input indices).
         timings: seconds per stage (``validate``, ``eigen``, ``features``, ``pairs``,
             ``signs``, ``correction``, ``map``, summed over the pairing hypotheses,
-            ``orientation``, ``select`` and ``refine``) and ``total``.
+            ``orientation``, ``select``, ``extrinsic`` when that hypothesis was tried, and
+            ``refine``) and ``total``.
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the component that was solved.
         correction_converged: whether every trust-region run of the chosen hypothesis
@@ -514,7 +515,10 @@ def intrinsic_symmetry(
         the vertices' best mirror plane (:func:`~torchsym.pointcloud.detect_reflection_plane`
         on ``extrinsic_samples`` vertices; each vertex to the vertex nearest its mirror
         image), refined and tested as in step 9, replaces it when the plane's symmetry
-        score is at least ``extrinsic_min_score`` and the map passes the tests. A surface
+        score is at least ``extrinsic_min_score`` and the map passes the tests (no partial
+        identity, distortion under ``max_distortion``); the result then holds the
+        thesis's pairs (possibly none), the functional map of the plane's point map in
+        ``Phi`` and ``R = I``. A surface
         that a reflection maps onto itself has that reflection as an intrinsic symmetry;
         the intrinsic hypotheses fail on shapes with holes, whose eigenfunctions the
         asymmetric holes bend, and there many shapes are still in a near-symmetric pose.
@@ -835,19 +839,27 @@ def intrinsic_symmetry(
     timings["select"] = time.perf_counter() - tic
     extrinsic_note = None
     if extrinsic_hypothesis and (not np.isfinite(table[best]).all() or table[best, 0] > _WEAK_DEFECT):
-        # every intrinsic hypothesis is weak: try the mirror plane of the vertices
+        # the chosen intrinsic map is weak: try the mirror plane of the vertices
         tic = time.perf_counter()
-        cand, plane_score = _extrinsic_candidate(v, evecs, area, candidates[0].pairs, extrinsic_samples, gen.initial_seed() + 1)
+        seed = (gen.initial_seed() + 1) % 2**64  # a seed of its own (initial_seed may be 2^64 - 1)
+        cand, plane_score = _extrinsic_candidate(v, evecs, area, candidates[0].pairs, extrinsic_samples, seed)
         row = score(cand)
         logger.debug("extrinsic plane: score %.3f, defects %s", plane_score, np.round(row, 4))
-        if plane_score >= extrinsic_min_score and np.isfinite(row).all():
+        weak_row = np.array2string(table[best], precision=3)
+        if plane_score >= extrinsic_min_score and np.isfinite(row).all() and row[-1] < limit:
             extrinsic_note = (
                 f"map from the extrinsic reflection plane of the vertices (symmetry score {plane_score:.2f}): "
-                f"the intrinsic hypotheses were weak (best defects {np.array2string(table[best], precision=3)})"
+                f"the intrinsic map was weak (defects {weak_row})"
             )
             candidates.append(cand)
             table = np.vstack([table, row])
             best = len(candidates) - 1
+        else:
+            notes.append(
+                f"the intrinsic map is weak (defects {weak_row}), and the extrinsic reflection plane of the "
+                f"vertices did not replace it (symmetry score {plane_score:.2f}, defects "
+                f"{np.array2string(row, precision=3)})"
+            )
         timings["extrinsic"] = time.perf_counter() - tic
     chosen = candidates[best]
     for cand, row in zip(candidates, table):
