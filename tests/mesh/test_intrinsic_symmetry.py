@@ -386,14 +386,14 @@ class TestExtrinsicHypothesis:
         assert strict.hypothesis != "extrinsic"
 
     def test_tried_when_the_chosen_map_has_a_large_defect(self, solved, monkeypatch):
-        import torchsym.mesh.intrinsic as intrinsic
+        from torchsym.mesh import intrinsic
 
         # a finite but large functional defect also counts as weak
         _, mesh, _ = solved
         bumpy = Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
         out = intrinsic_symmetry(bumpy)
         assert out.hypothesis == "extrinsic"
-        weak = [n for n in out.notes if "extrinsic reflection plane" in n][0]
+        weak = next(n for n in out.notes if "extrinsic reflection plane" in n)
         assert "inf" not in weak  # the intrinsic map had finite defects
         monkeypatch.setattr(intrinsic, "_WEAK_DEFECT", 100.0)
         assert intrinsic_symmetry(bumpy).hypothesis != "extrinsic"
