@@ -407,6 +407,21 @@ class TestExtrinsicHypothesis:
         assert out.hypothesis != "extrinsic"
         assert any("did not replace it" in n for n in out.notes)
 
+    def test_score_limit_scaled_by_the_patched_area(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+        from torchsym.mesh.synthetic import punch_holes
+
+        # 10 % of the area punched out and covered again: a plane scoring 0.72 (under 0.75,
+        # over 0.75 x (1 - patch share)) is accepted there, one scoring 0.6 is not
+        mesh, gt = blob
+        holed, truth = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
+        original = intrinsic._extrinsic_candidate
+        monkeypatch.setattr(intrinsic, "_WEAK_DEFECT", -1.0)  # every intrinsic map counts as weak
+        for fake, used in ((0.72, True), (0.6, False)):
+            monkeypatch.setattr(intrinsic, "_extrinsic_candidate", lambda *a, fake=fake: (original(*a)[0], fake))
+            out = intrinsic_symmetry(holed)
+            assert out.holes_closed >= 1 and (out.hypothesis == "extrinsic") == used
+
     def test_flat_mesh_own_plane_is_no_map(self):
         # the best mirror plane of a flat mesh is its own plane, whose map is the identity
         n = 12
