@@ -58,7 +58,6 @@ class KNNIndex:
         if method == "auto":
             method = "tree" if points.device.type == "cpu" else "auto"
         self.method = method
-        self.on_cpu = points.device.type == "cpu"
         self._tree = self._build() if method == "tree" else None
         self._points64: torch.Tensor | None = None
         self._centre: torch.Tensor | None = None

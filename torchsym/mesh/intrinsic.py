@@ -717,9 +717,10 @@ def intrinsic_symmetry(
                 "spectrum (fill_holes)"
             )
         notes.extend(f"fill_holes: {note}" for note in filling.notes)
-        if holes_closed:
-            patch_share = float(face_areas(v, f[n_faces:]).sum() / face_areas(v, f).sum())
-    v = (v - v.mean(axis=0)) / math.sqrt(face_areas(v, f).sum())  # unit area
+    tri_area = face_areas(v, f)  # (F,)
+    if holes_closed:
+        patch_share = float(tri_area[n_faces:].sum() / tri_area.sum())
+    v = (v - v.mean(axis=0)) / math.sqrt(tri_area.sum())  # unit area
     n = v.shape[0]
     timings["validate"], tic = time.perf_counter() - tic, time.perf_counter()
 

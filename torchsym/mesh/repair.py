@@ -137,7 +137,8 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
     if boundary_loops(faces, vertices.shape[0]) == 0:
         return HoleFilling(faces, 0)
     span, simple = _loop_spans(vertices, faces)
-    limit = max_area * float(face_areas(vertices, faces).sum())
+    old_area = face_areas(vertices, faces)  # (F,)
+    limit = max_area * float(old_area.sum())
     if simple.all() and (span > limit).all():  # no patch could be kept: MeshLab need not run
         return HoleFilling(faces, 0, (_large_note(span.size, max_area),))
     import pymeshlab  # only open meshes need it
@@ -153,7 +154,6 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
         return HoleFilling(faces, 0, ("holes left open: MeshLab's hole filling moved or added vertices",))
     new = out.face_matrix()[out.face_selection_array()].astype(np.int64)  # (N, 3) the patches
     notes: list[str] = []
-    old_area = face_areas(vertices, faces)
     area = face_areas(vertices, new)
     flat = area <= 1e-12 * max(float(old_area.max()), np.finfo(float).tiny)
     if flat.any():
@@ -163,7 +163,7 @@ def close_holes(vertices: np.ndarray, faces: np.ndarray, *, max_area: float = 0.
         return HoleFilling(faces, 0, tuple(notes))
     patch = _patches(new)  # (N,)
     patch_area = np.bincount(patch, weights=area)  # (P,)
-    large = patch_area > max_area * float(old_area.sum())
+    large = patch_area > limit
     if large.any():
         notes.append(_large_note(int(large.sum()), max_area))
     keep = ~large[patch]
