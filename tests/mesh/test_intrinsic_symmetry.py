@@ -10,7 +10,10 @@ from torchsym.mesh import (
     IntrinsicSymmetry,
     IntrinsicSymmetryResult,
     Mesh,
+    heat_kernel_signature,
+    hks_times,
     intrinsic_symmetry,
+    laplacian_eigen,
 )
 from torchsym.metrics.mesh import correspondence_rate
 
@@ -464,3 +467,123 @@ class TestExtrinsicHypothesis:
             intrinsic_symmetry(mesh, extrinsic_hypothesis="yes")  # type: ignore[arg-type]
         with pytest.raises(InputValueError, match="extrinsic_samples"):
             intrinsic_symmetry(mesh, extrinsic_samples=3)
+
+
+class TestOrientationCheck:
+    """Step 12: a final map that keeps the surface's orientation is refined again with the orientation penalty."""
+
+    @pytest.fixture(scope="class")
+    def spectral25(self, blob):
+        from torchsym.mesh.operators import mass_matrix
+        from torchsym.mesh.orientation import orientation_operators, reduce_descriptors
+
+        mesh, gt = blob
+        v, f = mesh.vertices.double().numpy(), mesh.faces.numpy()
+        evals, big = laplacian_eigen(v, f, 25, generator=torch.Generator().manual_seed(0))
+        area = mass_matrix(v, f).diagonal()
+        hks = heat_kernel_signature(evals[:13], big[:, :13], hks_times(evals[:13], 50))
+        ops = orientation_operators(v, f, big, reduce_descriptors(hks, area))  # (r, 25, 25)
+        rows = np.sort(np.random.default_rng(0).choice(v.shape[0], 300, replace=False))
+        return big, area, ops, rows, gt
+
+    def test_oriented_fit_is_the_exact_minimiser(self, spectral25):
+        from scipy.linalg import cho_solve
+
+        from torchsym.mesh.intrinsic import _oriented_fits
+
+        big, area, ops, rows, gt = spectral25
+        kk, weight = 16, 30.0
+        factor = _oriented_fits(big, area, rows, np.array([kk]), ops, weight)[kk]
+        phi = big[rows, :kk]
+        w = area[rows] / area[rows].sum()
+        image = gt[rows].copy()
+        wrong = np.random.default_rng(2).random(rows.size) < 0.3
+        image[wrong] = rows[wrong]  # a third of the map left in place: no exact fit
+        target = big[image, :kk]
+        c = cho_solve(factor, (phi.T @ (w[:, None] * target)).reshape(-1)).reshape(kk, kk)
+        o = ops[:, :kk, :kk]
+        scale = 2.0 * np.sum(o**2) + 2.0 * np.sum(np.trace(o, axis1=1, axis2=2) ** 2) / kk
+
+        def energy(m):
+            fit = np.sum(w[:, None] * (phi @ m - target) ** 2)
+            return fit + weight * sum(np.sum((m @ x + x @ m) ** 2) for x in o) / scale
+
+        rng = np.random.default_rng(1)
+        base = energy(c)
+        for _ in range(5):  # the gradient vanishes: a step either way costs the same, second-order amount
+            d = rng.standard_normal((kk, kk))
+            up, down = energy(c + 1e-3 * d), energy(c - 1e-3 * d)
+            assert up > base and down > base
+            assert abs(up - down) < 1e-6 * (up + down - 2 * base)
+
+    def test_penalty_keeps_the_mirror_and_dislodges_the_identity(self, spectral25):
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh.intrinsic import _oriented_fits, _sampled_zoomout
+
+        big, area, ops, rows, gt = spectral25
+        ks = np.array([16, 19, 22, 25])
+        trees = {int(k): cKDTree(big[:, :k]) for k in ks}
+        oriented = _oriented_fits(big, area, rows, ks, ops, 30.0)
+        mirror, _ = _sampled_zoomout(big, area, rows, gt[rows], ks, trees, True, oriented)
+        assert np.mean(mirror == gt[rows]) > 0.99
+        plain, _ = _sampled_zoomout(big, area, rows, rows.copy(), ks, trees, True)
+        assert np.mean(plain == rows) > 0.99  # plain ZoomOut cannot leave the identity
+        moved, _ = _sampled_zoomout(big, area, rows, rows.copy(), ks, trees, True, oriented)
+        assert np.mean(moved == rows) < 0.2
+
+    @staticmethod
+    def _two_mirror_blob():
+        """Symmetric across x = 0 and y = 0, hence also under the half turn about z (which keeps orientation)."""
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh.synthetic import icosphere
+
+        s = icosphere(3)
+        v = s.vertices.numpy()
+        x, y, z = v.T
+        scale = 1 + 0.8 * x**2 + 0.3 * y**2 + 0.25 * z
+        for cx in (-1.0, 1.0):
+            for cy in (-1.0, 1.0):
+                c = np.array([0.6 * cx, 0.3 * cy, 0.7])
+                scale = scale + 0.5 * np.exp(-((v - c / np.linalg.norm(c)) ** 2).sum(1) / 0.02)
+        w = v * scale[:, None]
+        maps = {name: cKDTree(w).query(w * np.array(m))[1] for name, m in
+                (("x", [-1.0, 1.0, 1.0]), ("y", [1.0, -1.0, 1.0]), ("turn", [-1.0, -1.0, 1.0]))}
+        return Mesh(torch.from_numpy(w), s.faces), maps
+
+    def test_a_map_that_keeps_orientation_is_replaced(self, monkeypatch):
+        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import _fit_functional
+        from torchsym.mesh.orientation import orientation_reversal
+
+        mesh, maps = self._two_mirror_blob()
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        assert np.mean(orientation_reversal(v, f, maps["turn"]) < 0) == 0.0
+        original = intrinsic._sampled_zoomout
+
+        def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None):
+            # step 9's refinement (no penalty) ends on the half turn, an isometric involution
+            if oriented is not None:
+                return original(big, area, rows, image, ks, trees, involution, oriented)
+            k = int(ks[-1])
+            turn = maps["turn"][rows]
+            return turn, _fit_functional(big[rows, :k], big[turn, :k], area[rows])
+
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", refine_to_the_turn)
+        off = intrinsic_symmetry(mesh, refine_orientation=0.0)
+        assert np.mean(off.map.numpy() == maps["turn"]) > 0.95 and "orientation_check" not in off.timings
+        out = intrinsic_symmetry(mesh)
+        got = out.map.numpy()
+        assert np.mean(orientation_reversal(v, f, got) < 0) > 0.8
+        assert max(np.mean(got == maps["x"]), np.mean(got == maps["y"])) > 0.9
+        assert any("refined again with the orientation penalty" in n for n in out.notes)
+
+    def test_a_reflection_passes_untouched(self, solved):
+        result = solved[0]
+        assert "orientation_check" in result.timings
+        assert not any("orientation" in n and "penalty" in n for n in result.notes)
+
+    def test_bad_weight(self, blob):
+        with pytest.raises(InputValueError, match="refine_orientation"):
+            intrinsic_symmetry(blob[0], refine_orientation=-1.0)

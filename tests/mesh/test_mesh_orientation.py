@@ -204,3 +204,56 @@ def test_selection_without_refinement_and_with_few_samples(blob):
     raised = intrinsic_symmetry(mesh, select_samples=50, refine_k=40)
     assert any("select_samples raised from 50 to 160" in n for n in raised.notes)
     assert np.mean(raised.map.numpy() == gt) > 0.95
+
+
+class TestOrientationReversal:
+    """The pointwise test of whether a self map reverses the surface's orientation."""
+
+    @staticmethod
+    def _map(v: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+        from scipy.spatial import cKDTree
+
+        return cKDTree(v).query(v @ matrix.T)[1]
+
+    def test_reflection_reverses_and_rotation_keeps(self):
+        from torchsym.mesh.orientation import orientation_reversal
+        from torchsym.mesh.synthetic import icosphere
+
+        s = icosphere(3)
+        v, f = s.vertices.numpy(), s.faces.numpy()
+        # the icosahedron's vertex coordinates are symmetric under every sign flip of one axis
+        mirror = self._map(v, np.diag([-1.0, 1.0, 1.0]))
+        half_turn = self._map(v, np.diag([-1.0, -1.0, 1.0]))  # rotation by pi about z
+        assert np.all(orientation_reversal(v, f, mirror) == -1)
+        assert np.all(orientation_reversal(v, f, half_turn) == 1)
+        assert np.all(orientation_reversal(v, f, np.arange(v.shape[0])) == 1)
+        # the winding, not the coordinates, defines the orientation: flipping it flips nothing here
+        assert np.all(orientation_reversal(v, f[:, ::-1], mirror) == -1)
+
+    def test_rows_and_collapse(self, blob):
+        from torchsym.mesh.orientation import orientation_reversal
+
+        mesh, gt = blob
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        full = orientation_reversal(v, f, gt)
+        assert (full == -1).mean() > 0.95  # all but a few vertices on the symmetry curve
+        rows = np.array([5, 0, 17, 5])
+        assert np.array_equal(orientation_reversal(v, f, gt, rows=rows), full[rows])
+        assert np.all(orientation_reversal(v, f, np.zeros(v.shape[0], dtype=np.int64)) == 0)  # all to one vertex
+
+    def test_anticommutation_penalty_separates_mirror_from_identity(self, spectral_blob):
+        from torchsym.mesh.orientation import (
+            anticommutation_penalty,
+            reduce_descriptors,
+        )
+
+        v, f, _, evecs, area, hks, _, true_c = spectral_blob
+        ops = orientation_operators(v, f, evecs, reduce_descriptors(hks, area))
+        pen = anticommutation_penalty(ops)
+        value = lambda c: float(c.ravel() @ pen @ c.ravel())
+        assert value(true_c) < 0.01
+        assert value(np.eye(true_c.shape[0])) > 1.0  # the identity keeps the orientation: twice the random mean
+        from scipy.stats import ortho_group
+
+        randoms = [value(ortho_group.rvs(true_c.shape[0], random_state=i)) for i in range(200)]
+        assert np.mean(randoms) == pytest.approx(1.0, rel=0.1)  # normalised by the Haar mean

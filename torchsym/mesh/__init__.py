@@ -27,10 +27,13 @@ from torchsym.mesh.operators import (
     ring_neighbourhood,
 )
 from torchsym.mesh.orientation import (
+    anticommutation_penalty,
     descriptor_operators,
     functional_to_pointwise,
     orientation_operators,
+    orientation_reversal,
     orientation_reversing_map,
+    reduce_descriptors,
     resolvent_mask,
 )
 from torchsym.mesh.pairs import eigenfunction_signs, pair_affinity, symmetric_pairs
@@ -45,6 +48,7 @@ __all__ = [
     "Mesh",
     "ValidatedMesh",
     "adjacency_matrix",
+    "anticommutation_penalty",
     "boundary_loops",
     "close_holes",
     "correct_eigenfunctions",
@@ -65,9 +69,11 @@ __all__ = [
     "map_quality",
     "mass_matrix",
     "orientation_operators",
+    "orientation_reversal",
     "orientation_reversing_map",
     "pair_affinity",
     "pointwise_to_functional",
+    "reduce_descriptors",
     "resolvent_mask",
     "ring_neighbourhood",
     "shortest_paths",

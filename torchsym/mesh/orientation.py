@@ -38,12 +38,16 @@ from scipy.spatial import cKDTree
 
 from torchsym.core.checks import check_positive
 from torchsym.errors import InputShapeError, InputValueError, SolverError
+from torchsym.mesh.operators import ring_neighbourhood
 
 __all__ = [
+    "anticommutation_penalty",
     "descriptor_operators",
     "functional_to_pointwise",
     "orientation_operators",
+    "orientation_reversal",
     "orientation_reversing_map",
+    "reduce_descriptors",
     "resolvent_mask",
 ]
 
@@ -145,6 +149,46 @@ def _commutator_gram(ops: np.ndarray, sign: float) -> tuple[np.ndarray, float]:
     return gram, max(scale, np.finfo(float).tiny)
 
 
+def reduce_descriptors(descriptors: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """Descriptors scaled to unit area-weighted L2 norm, in an area-orthogonal basis of their span, ``(V, r)``.
+
+    The descriptor, commutativity and orientation terms depend on the descriptors only
+    through ``sum_p f_p f_p^T``, so this basis gives the same energies with fewer columns
+    (the HKS lives in the span of the ``k`` functions ``phi_i^2``: 50 scales, at most ``k``
+    columns). Scaling each column first makes the result independent of the order and
+    scale of the columns.
+
+    Raises:
+        InputShapeError: ``descriptors`` without one row per entry of ``area``.
+        InputValueError: NaN or inf, or no non-zero descriptor.
+    """
+    desc = np.asarray(descriptors, dtype=np.float64)
+    if desc.ndim != 2 or desc.shape[0] != area.shape[0]:
+        raise InputShapeError(f"descriptors: expected ({area.shape[0]}, p), one row per vertex, got {tuple(desc.shape)}")
+    if not np.isfinite(desc).all():
+        raise InputValueError("descriptors: expected finite values, got NaN or inf")
+    norms = np.sqrt((area[:, None] * desc**2).sum(axis=0))  # (p,)
+    if not (norms > 0).any():
+        raise InputValueError("descriptors: expected at least one non-zero descriptor, got none")
+    desc = desc[:, norms > 0] / norms[norms > 0]
+    gram_f, basis = np.linalg.eigh(desc.T @ (area[:, None] * desc))  # (p,), (p, p)
+    keep = gram_f > 1e-12 * max(float(gram_f.max()), np.finfo(float).tiny)
+    return desc @ basis[:, keep]  # (V, r), sum of outer products unchanged
+
+
+def anticommutation_penalty(ops: np.ndarray) -> np.ndarray:
+    """Gram matrix of ``sum_p |C O_p + O_p C|^2`` in ``vec(C)`` (row major), divided by its mean.
+
+    The mean is the term's value under a uniformly random orthogonal ``C`` (see
+    :func:`_commutator_gram`), so that the penalty is about 1 for a map that ignores
+    orientation and 0 for the functional map of an orientation-reversing isometry that
+    preserves the descriptors. ``ops``: ``(p, k, k)`` orientation operators
+    (:func:`orientation_operators`); the result is ``(k^2, k^2)``.
+    """
+    gram, scale = _commutator_gram(ops, -1.0)
+    return gram / scale
+
+
 def orientation_reversing_map(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -199,21 +243,7 @@ def orientation_reversing_map(
     if not weights.sum() > 0:
         raise InputValueError("w_descriptor, w_laplacian, w_commutation, w_orientation: expected a positive sum, got 0")
     gamma = check_positive(gamma, "gamma")
-    desc = np.asarray(descriptors, dtype=np.float64)
-    if desc.ndim != 2 or desc.shape[0] != evecs.shape[0]:
-        raise InputShapeError(f"descriptors: expected ({evecs.shape[0]}, p), one row per vertex, got {tuple(desc.shape)}")
-    if not np.isfinite(desc).all():
-        raise InputValueError("descriptors: expected finite values, got NaN or inf")
-    norms = np.sqrt((area[:, None] * desc**2).sum(axis=0))  # (p,)
-    if not (norms > 0).any():
-        raise InputValueError("descriptors: expected at least one non-zero descriptor, got none")
-    desc = desc[:, norms > 0] / norms[norms > 0]
-    # Every term depends on the descriptors only through sum_p f_p f_p^T, so an
-    # area-orthogonal basis of their span gives the same energy with fewer columns (the
-    # HKS lives in the span of the k functions phi_i^2: 50 scales -> at most k columns).
-    gram_f, basis = np.linalg.eigh(desc.T @ (area[:, None] * desc))  # (p,), (p, p)
-    keep = gram_f > 1e-12 * max(float(gram_f.max()), np.finfo(float).tiny)
-    desc = desc @ basis[:, keep]  # (V, r), sum of outer products unchanged
+    desc = reduce_descriptors(descriptors, area)  # (V, r)
     weights = weights / weights.sum()
     b = evecs.T @ (area[:, None] * desc)  # (k, p) descriptors in the eigenbasis
     # effective number of independent descriptors, (tr G)^2 / |G|^2 with G = B^T B (no constant)
@@ -247,6 +277,54 @@ def orientation_reversing_map(
     except np.linalg.LinAlgError as exc:
         raise SolverError(f"orientation_reversing_map: the quadratic system is singular ({exc}); raise w_laplacian") from exc
     return x.reshape(k, k)
+
+
+def orientation_reversal(
+    vertices: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray, rows: np.ndarray | None = None, rings: int = 2
+) -> np.ndarray:
+    """Whether a self map reverses the surface's orientation around each vertex of ``rows``, ``(R,)`` in {-1, 0, 1}.
+
+    At vertex ``x`` with neighbours ``y`` (within ``rings`` edges), the offsets ``y - x``
+    in a tangent frame at ``x`` and ``T y - T x`` in the frame at ``T x`` (both frames
+    right-handed about the vertex normals of the face winding) give the 2 x 2 matrix
+    ``M = sum_y (y - x) (T y - T x)^T``; ``sign det M`` is -1 where the map reverses the
+    orientation, +1 where it keeps it, 0 where it collapses the neighbourhood. An
+    intrinsic reflection reverses it everywhere but along its symmetry curve; the share
+    of -1 is a pointwise check of a symmetric map that needs no ground truth (the maps
+    of FAUST that fail by turning the torso half a turn about its axis keep the
+    orientation on 65-80 % of the vertices, the true symmetries reverse it on 75-85 %).
+
+    Args:
+        vertices: ``(V, 3)`` positions.
+        faces: ``(F, 3)`` consistently wound triangles.
+        vertex_map: ``(V,)`` the image of every vertex.
+        rows: the vertices to test (default: all).
+        rings: the neighbourhood's size in edges.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    vmap = np.asarray(vertex_map, dtype=np.int64)
+    n = v.shape[0]
+    rows = np.arange(n) if rows is None else np.asarray(rows, dtype=np.int64)
+    face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
+    normal = np.zeros_like(v)
+    for c in range(3):
+        np.add.at(normal, faces[:, c], face_normal)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), np.finfo(float).tiny)
+    # a right-handed tangent frame (e1, e2, n) at every vertex
+    helper = np.where(np.abs(normal[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    e1 = np.cross(normal, helper)
+    e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
+    e2 = np.cross(normal, e1)
+    reach = ring_neighbourhood(faces, n, rings=rings)[rows].tocoo()  # (R, V)
+    centre, nbr = rows[reach.row], reach.col  # one entry per (row, neighbour)
+    off = v[nbr] - v[centre]  # (E, 3)
+    img = v[vmap[nbr]] - v[vmap[centre]]  # (E, 3)
+    p = np.stack([(off * e1[centre]).sum(1), (off * e2[centre]).sum(1)], axis=1)  # (E, 2)
+    q = np.stack([(img * e1[vmap[centre]]).sum(1), (img * e2[vmap[centre]]).sum(1)], axis=1)  # (E, 2)
+    outer = (p[:, :, None] * q[:, None, :]).reshape(-1, 4)  # (E, 4)
+    m = np.zeros((rows.size, 4))
+    np.add.at(m, reach.row, outer)
+    return np.sign(m[:, 0] * m[:, 3] - m[:, 1] * m[:, 2])
 
 
 def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
