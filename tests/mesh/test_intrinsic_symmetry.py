@@ -487,20 +487,18 @@ class TestOrientationCheck:
         return big, area, ops, rows, gt
 
     def test_oriented_fit_is_the_exact_minimiser(self, spectral25):
-        from scipy.linalg import cho_solve
-
-        from torchsym.mesh.intrinsic import _oriented_fits
+        from torchsym.mesh.intrinsic import _oriented_fits, _zoomout_fit
 
         big, area, ops, rows, gt = spectral25
         kk, weight = 16, 30.0
-        factor = _oriented_fits(big, area, rows, np.array([kk]), ops, weight)[kk]
+        factor = _oriented_fits(big, area, rows, np.array([kk]), ops, (weight,))[0][kk]
         phi = big[rows, :kk]
         w = area[rows] / area[rows].sum()
         image = gt[rows].copy()
         wrong = np.random.default_rng(2).random(rows.size) < 0.3
         image[wrong] = rows[wrong]  # a third of the map left in place: no exact fit
         target = big[image, :kk]
-        c = cho_solve(factor, (phi.T @ (w[:, None] * target)).reshape(-1)).reshape(kk, kk)
+        c = _zoomout_fit(big[:, :kk], area, rows, image, factor)
         o = ops[:, :kk, :kk]
         scale = 2.0 * np.sum(o**2) + 2.0 * np.sum(np.trace(o, axis1=1, axis2=2) ** 2) / kk
 
@@ -524,7 +522,7 @@ class TestOrientationCheck:
         big, area, ops, rows, gt = spectral25
         ks = np.array([16, 19, 22, 25])
         trees = {int(k): cKDTree(big[:, :k]) for k in ks}
-        oriented = _oriented_fits(big, area, rows, ks, ops, 30.0)
+        oriented = _oriented_fits(big, area, rows, ks, ops, (30.0,))[0]
         mirror, _ = _sampled_zoomout(big, area, rows, gt[rows], ks, trees, True, oriented)
         assert np.mean(mirror == gt[rows]) > 0.99
         plain, _ = _sampled_zoomout(big, area, rows, rows.copy(), ks, trees, True)
@@ -552,25 +550,31 @@ class TestOrientationCheck:
                 (("x", [-1.0, 1.0, 1.0]), ("y", [1.0, -1.0, 1.0]), ("turn", [-1.0, -1.0, 1.0]))}
         return Mesh(torch.from_numpy(w), s.faces), maps
 
-    def test_a_map_that_keeps_orientation_is_replaced(self, monkeypatch):
-        from torchsym.mesh import intrinsic
+    @staticmethod
+    def _turn_refiner(intrinsic, maps, oriented_too: bool = False):
+        """A stand-in for ZoomOut whose plain refinement (and with ``oriented_too`` every one) ends on the half turn."""
         from torchsym.mesh.intrinsic import _fit_functional
-        from torchsym.mesh.orientation import orientation_reversal
 
-        mesh, maps = self._two_mirror_blob()
-        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
-        assert np.mean(orientation_reversal(v, f, maps["turn"]) < 0) == 0.0
         original = intrinsic._sampled_zoomout
 
         def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None):
-            # step 9's refinement (no penalty) ends on the half turn, an isometric involution
-            if oriented is not None:
+            # an isometric involution that keeps the orientation
+            if oriented is not None and not oriented_too:
                 return original(big, area, rows, image, ks, trees, involution, oriented)
             k = int(ks[-1])
             turn = maps["turn"][rows]
             return turn, _fit_functional(big[rows, :k], big[turn, :k], area[rows])
 
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", refine_to_the_turn)
+        return refine_to_the_turn
+
+    def test_a_map_that_keeps_orientation_is_replaced(self, monkeypatch):
+        from torchsym.mesh import intrinsic
+        from torchsym.mesh.orientation import orientation_reversal
+
+        mesh, maps = self._two_mirror_blob()
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        assert np.mean(orientation_reversal(v, f, maps["turn"]) < 0) == 0.0
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps))
         off = intrinsic_symmetry(mesh, refine_orientation=0.0)
         assert np.mean(off.map.numpy() == maps["turn"]) > 0.95 and "orientation_check" not in off.timings
         out = intrinsic_symmetry(mesh)
@@ -587,3 +591,69 @@ class TestOrientationCheck:
     def test_bad_weight(self, blob):
         with pytest.raises(InputValueError, match="refine_orientation"):
             intrinsic_symmetry(blob[0], refine_orientation=-1.0)
+
+    def test_rescues_when_no_hypothesis_passes(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        original = intrinsic._sampled_zoomout
+
+        def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None):
+            # step 9's refinement drifts to the identity on every hypothesis, so none passes
+            if oriented is not None:
+                return original(big, area, rows, image, ks, trees, involution, oriented)
+            return rows.copy(), np.eye(int(ks[-1]))
+
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", plain_drifts_home)
+        off = intrinsic_symmetry(mesh, refine_orientation=0.0)
+        assert any("returned unrefined and is unreliable" in n for n in off.notes)
+        out = intrinsic_symmetry(mesh)
+        assert not any("unreliable" in n for n in out.notes)
+        assert any(n.startswith("no hypothesis passed the tests of an isometric involution; refined") for n in out.notes)
+        assert correspondence_rate(mesh, out.map, ground_truth=torch.from_numpy(gt)).rate > 0.95
+        assert out.refined_functional_map.shape == (25, 25)
+
+    def test_no_reoriented_map_found_keeps_the_map(self, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, maps = self._two_mirror_blob()
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps, oriented_too=True))
+        out = intrinsic_symmetry(mesh)
+        assert np.mean(out.map.numpy() == maps["turn"]) > 0.95
+        assert any("found no map that reverses it at 60%, the map is unreliable" in n for n in out.notes)
+
+    def test_skipped_on_inconsistent_winding(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import consistently_wound
+
+        mesh, maps = self._two_mirror_blob()
+        f = mesh.faces.numpy().copy()
+        assert consistently_wound(f)
+        right = mesh.vertices.numpy()[f].mean(axis=1)[:, 0] > 0
+        f[right] = f[right][:, ::-1]  # half the mesh mirrored without flipping its triangles
+        assert not consistently_wound(f)
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps))
+        out = intrinsic_symmetry(Mesh(mesh.vertices, torch.from_numpy(f)))
+        assert "orientation_check" not in out.timings
+        assert any("not consistently wound" in n for n in out.notes)
+
+    def test_skipped_above_refine_k_50(self, blob):
+        out = intrinsic_symmetry(blob[0], refine_k=51)
+        assert "orientation_check" not in out.timings
+        assert any("refine_k > 50" in n for n in out.notes)
+
+    def test_module_forwards_and_checks_the_weight(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        seen = {}
+        original = intrinsic.intrinsic_symmetry
+
+        def spy(mesh, **kw):
+            seen.update(kw)
+            return original(mesh, **kw)
+
+        monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+        IntrinsicSymmetry(refine_orientation=12.5)(blob[0])
+        assert seen["refine_orientation"] == 12.5
+        with pytest.raises(InputValueError, match="refine_orientation"):
+            IntrinsicSymmetry(refine_orientation=-1.0)

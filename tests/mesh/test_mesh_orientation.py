@@ -257,3 +257,29 @@ class TestOrientationReversal:
 
         randoms = [value(ortho_group.rvs(true_c.shape[0], random_state=i)) for i in range(200)]
         assert np.mean(randoms) == pytest.approx(1.0, rel=0.1)  # normalised by the Haar mean
+
+    def test_missing_images_and_bad_input(self, blob):
+        from torchsym.errors import InputShapeError, InputValueError
+        from torchsym.mesh.operators import ring_neighbourhood
+        from torchsym.mesh.orientation import orientation_reversal
+
+        mesh, gt = blob
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        partial = gt.copy()
+        partial[0] = -1  # no image
+        out = orientation_reversal(v, f, partial)
+        assert out.dtype == np.int64
+        near = ring_neighbourhood(f, v.shape[0], rings=2)[0].indices
+        assert out[0] == 0 and np.all(out[near] == 0)
+        far = np.setdiff1d(np.arange(v.shape[0]), np.append(near, 0))
+        assert np.array_equal(out[far], orientation_reversal(v, f, gt)[far])
+        with pytest.raises(InputShapeError, match="vertex_map: expected"):
+            orientation_reversal(v, f, gt[:-1])
+        with pytest.raises(InputValueError, match="vertex_map: expected indices"):
+            orientation_reversal(v, f, np.full(v.shape[0], v.shape[0]))
+        with pytest.raises(InputValueError, match="rows: expected"):
+            orientation_reversal(v, f, gt, rows=np.array([-1]))
+        with pytest.raises(InputValueError, match="rings: expected an integer >= 1"):
+            orientation_reversal(v, f, gt, rings=0)
+        with pytest.raises(InputShapeError, match="vertices: expected"):
+            orientation_reversal(v[:, :2], f, gt)

@@ -162,6 +162,9 @@ def reduce_descriptors(descriptors: np.ndarray, area: np.ndarray) -> np.ndarray:
         InputShapeError: ``descriptors`` without one row per entry of ``area``.
         InputValueError: NaN or inf, or no non-zero descriptor.
     """
+    area = np.asarray(area, dtype=np.float64)
+    if area.ndim != 1:
+        raise InputShapeError(f"area: expected (V,), got {tuple(area.shape)}")
     desc = np.asarray(descriptors, dtype=np.float64)
     if desc.ndim != 2 or desc.shape[0] != area.shape[0]:
         raise InputShapeError(f"descriptors: expected ({area.shape[0]}, p), one row per vertex, got {tuple(desc.shape)}")
@@ -185,6 +188,9 @@ def anticommutation_penalty(ops: np.ndarray) -> np.ndarray:
     preserves the descriptors. ``ops``: ``(p, k, k)`` orientation operators
     (:func:`orientation_operators`); the result is ``(k^2, k^2)``.
     """
+    ops = np.asarray(ops, dtype=np.float64)
+    if ops.ndim != 3 or ops.shape[1] != ops.shape[2]:
+        raise InputShapeError(f"ops: expected (p, k, k), got {tuple(ops.shape)}")
     gram, scale = _commutator_gram(ops, -1.0)
     return gram / scale
 
@@ -292,19 +298,46 @@ def orientation_reversal(
     intrinsic reflection reverses it everywhere but along its symmetry curve; the share
     of -1 is a pointwise check of a symmetric map that needs no ground truth (the maps
     of FAUST that fail by turning the torso half a turn about its axis keep the
-    orientation on 65-80 % of the vertices, the true symmetries reverse it on 75-85 %).
+    orientation on 65-80 % of the vertices, the true symmetries of FAUST and TOSCA
+    reverse it on 65-85 %). Entries of ``vertex_map`` that are -1 (no image) give 0 at
+    every row whose vertex or a neighbour has no image.
 
     Args:
         vertices: ``(V, 3)`` positions.
         faces: ``(F, 3)`` consistently wound triangles.
-        vertex_map: ``(V,)`` the image of every vertex.
+        vertex_map: ``(V,)`` the image of every vertex (-1: none).
         rows: the vertices to test (default: all).
-        rings: the neighbourhood's size in edges.
+        rings: the neighbourhood's size in edges, at least 1.
+
+    Returns:
+        ``(R,)`` int64.
+
+    Raises:
+        InputShapeError: ``vertices`` not ``(V, 3)``, ``faces`` not ``(F, 3)``, or
+            ``vertex_map`` not ``(V,)``.
+        InputValueError: indices out of range, or ``rings < 1``.
     """
     v = np.asarray(vertices, dtype=np.float64)
-    vmap = np.asarray(vertex_map, dtype=np.int64)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise InputShapeError(f"vertices: expected (V, 3), got {tuple(v.shape)}")
     n = v.shape[0]
-    rows = np.arange(n) if rows is None else np.asarray(rows, dtype=np.int64)
+    faces = np.asarray(faces, dtype=np.int64)
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise InputShapeError(f"faces: expected (F, 3), got {tuple(faces.shape)}")
+    if faces.size and (faces.min() < 0 or faces.max() >= n):
+        raise InputValueError(f"faces: expected vertex indices in [0, {n}), got {faces.min()}..{faces.max()}")
+    vmap = np.asarray(vertex_map, dtype=np.int64)
+    if vmap.shape != (n,):
+        raise InputShapeError(f"vertex_map: expected ({n},), one image per vertex, got {tuple(vmap.shape)}")
+    if vmap.size and (vmap.min() < -1 or vmap.max() >= n):
+        raise InputValueError(f"vertex_map: expected indices in [-1, {n}), got {vmap.min()}..{vmap.max()}")
+    rows = np.arange(n) if rows is None else np.asarray(rows, dtype=np.int64).reshape(-1)
+    if rows.size and (rows.min() < 0 or rows.max() >= n):
+        raise InputValueError(f"rows: expected vertex indices in [0, {n}), got {rows.min()}..{rows.max()}")
+    if isinstance(rings, bool) or not isinstance(rings, (int, np.integer)) or rings < 1:
+        raise InputValueError(f"rings: expected an integer >= 1, got {rings!r}")
+    missing = vmap < 0
+    vmap = np.where(missing, 0, vmap)  # placeholders; their rows are zeroed below
     face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
     normal = np.zeros_like(v)
     for c in range(3):
@@ -324,7 +357,12 @@ def orientation_reversal(
     outer = (p[:, :, None] * q[:, None, :]).reshape(-1, 4)  # (E, 4)
     m = np.zeros((rows.size, 4))
     np.add.at(m, reach.row, outer)
-    return np.sign(m[:, 0] * m[:, 3] - m[:, 1] * m[:, 2])
+    out = np.sign(m[:, 0] * m[:, 3] - m[:, 1] * m[:, 2]).astype(np.int64)
+    if missing.any():
+        bad = missing[rows].copy()
+        np.logical_or.at(bad, reach.row, missing[nbr])
+        out[bad] = 0
+    return out
 
 
 def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
