@@ -623,8 +623,7 @@ class TestOrientationCheck:
         assert any("found no map that reverses it at 60%, the map is unreliable" in n for n in out.notes)
 
     def test_skipped_on_inconsistent_winding(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
-        from torchsym.mesh.intrinsic import consistently_wound
+        from torchsym.mesh import consistently_wound, intrinsic
 
         mesh, maps = self._two_mirror_blob()
         f = mesh.faces.numpy().copy()
@@ -632,6 +631,12 @@ class TestOrientationCheck:
         right = mesh.vertices.numpy()[f].mean(axis=1)[:, 0] > 0
         f[right] = f[right][:, ::-1]  # half the mesh mirrored without flipping its triangles
         assert not consistently_wound(f)
+        assert consistently_wound(f[:0])
+        from torchsym.mesh.operators import _pair_keys
+
+        assert _pair_keys(np.array([[0, 3_000_000_000]])) is None  # the slow exact path
+        huge = mesh.faces.numpy() + 3_000_000_000  # indices only: the winding test needs no vertices
+        assert consistently_wound(huge) and not consistently_wound(f + 3_000_000_000)
         monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps))
         out = intrinsic_symmetry(Mesh(mesh.vertices, torch.from_numpy(f)))
         assert "orientation_check" not in out.timings

@@ -239,6 +239,15 @@ class TestOrientationReversal:
         assert (full == -1).mean() > 0.95  # all but a few vertices on the symmetry curve
         rows = np.array([5, 0, 17, 5])
         assert np.array_equal(orientation_reversal(v, f, gt, rows=rows), full[rows])
+        from torchsym.errors import InputShapeError
+        from torchsym.mesh.operators import ring_neighbourhood
+
+        given = ring_neighbourhood(f, v.shape[0], rings=2)
+        assert np.array_equal(orientation_reversal(v, f, gt, rows=rows, neighbourhood=given), full[rows])
+        one_ring = orientation_reversal(v, f, gt, rings=1)
+        assert np.array_equal(orientation_reversal(v, f, gt, neighbourhood=ring_neighbourhood(f, v.shape[0], rings=1)), one_ring)
+        with pytest.raises(InputShapeError, match="neighbourhood: expected"):
+            orientation_reversal(v, f, gt, neighbourhood=given[:5])
         assert np.all(orientation_reversal(v, f, np.zeros(v.shape[0], dtype=np.int64)) == 0)  # all to one vertex
 
     def test_anticommutation_penalty_separates_mirror_from_identity(self, spectral_blob):

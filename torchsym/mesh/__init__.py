@@ -19,6 +19,7 @@ from torchsym.mesh.intrinsic import (
 from torchsym.mesh.mesh import Mesh
 from torchsym.mesh.operators import (
     adjacency_matrix,
+    consistently_wound,
     cotangent_laplacian,
     edge_graph,
     face_areas,
@@ -51,6 +52,7 @@ __all__ = [
     "anticommutation_penalty",
     "boundary_loops",
     "close_holes",
+    "consistently_wound",
     "correct_eigenfunctions",
     "correction_cost",
     "cotangent_laplacian",

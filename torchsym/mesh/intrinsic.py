@@ -39,6 +39,7 @@ from torchsym.mesh.geodesic import geodesic_distances, thin_points
 from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
 from torchsym.mesh.mesh import Mesh
 from torchsym.mesh.operators import (
+    consistently_wound,
     edge_face_counts,
     edge_graph,
     face_areas,
@@ -271,17 +272,6 @@ def nearest_involution(fmap: np.ndarray) -> np.ndarray:
     """
     lam, q = np.linalg.eigh(0.5 * (fmap + fmap.T))
     return (q * np.where(lam >= 0, 1.0, -1.0)) @ q.T
-
-
-def consistently_wound(faces: np.ndarray) -> bool:
-    """Whether every edge shared by two triangles is traversed in opposite directions by them.
-
-    Then the winding defines one orientation of each connected surface; where it does
-    not (half a mesh mirrored without flipping its triangles), the orientation test of
-    :func:`intrinsic_symmetry`'s step 12 would be meaningless.
-    """
-    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])  # (3F, 2)
-    return np.unique(directed, axis=0).shape[0] == directed.shape[0]
 
 
 def _zoomout_fit(phi: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, factor) -> np.ndarray:
@@ -625,7 +615,7 @@ def intrinsic_symmetry(
         reverses the orientation at the most vertices (at least 60 %; ties: the later)
         replaces the result. When no hypothesis passed the tests of step 9, the same
         search starts from every hypothesis's own map. Skipped when the faces are not
-        consistently wound (:func:`consistently_wound`) or ``refine_k > 50``.
+        consistently wound (:func:`~torchsym.mesh.operators.consistently_wound`) or ``refine_k > 50``.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
@@ -856,7 +846,8 @@ def intrinsic_symmetry(
     t_h = 4.0 * math.log(10.0) / evals[1]
     hks_th = heat_kernel_signature(evals, evecs, np.array([t_h]))[:, 0]  # (V',)
     graph = edge_graph(v, f)
-    features = hks_feature_points(hks_th, ring_neighbourhood(f, n, rings=2))  # (d,)
+    two_ring = ring_neighbourhood(f, n, rings=2)  # (V', V'), also step 12's neighbourhoods
+    features = hks_feature_points(hks_th, two_ring)  # (d,)
     features = thin_points(graph, features, feature_radius)[:max_features]  # (d,)
     dense_desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))  # (V', h)
     desc = dense_desc[features]  # (d, h)
@@ -1026,7 +1017,7 @@ def intrinsic_symmetry(
     if check_orientation:
         # step 12: a reflection reverses the surface's orientation
         tic = time.perf_counter()
-        share = float(np.mean(orientation_reversal(v, f, vmap, rows) < 0))
+        share = float(np.mean(orientation_reversal(v, f, vmap, rows, neighbourhood=two_ring) < 0))
         if chosen.refined is None:  # no hypothesis passed the tests: start from each one's own map
             starts = [(ks, cand.start) for cand in candidates if cand.start is not None]
         elif share < _KEEPS_ORIENTATION:  # the map keeps the orientation on most of the shape
@@ -1050,7 +1041,7 @@ def intrinsic_symmetry(
                     if probe.near_self(image) >= _REORIENTED_NEAR_SELF or not probe.distortion(image) < limit:
                         continue
                     trial = trees[int(ks[-1])].query(big[:, : ks[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
-                    trial_share = float(np.mean(orientation_reversal(v, f, trial, rows) < 0))
+                    trial_share = float(np.mean(orientation_reversal(v, f, trial, rows, neighbourhood=two_ring) < 0))
                     if trial_share >= best_share:
                         best_share, found = trial_share, (trial, fitted)
             if found is not None:

@@ -286,7 +286,12 @@ def orientation_reversing_map(
 
 
 def orientation_reversal(
-    vertices: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray, rows: np.ndarray | None = None, rings: int = 2
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    vertex_map: np.ndarray,
+    rows: np.ndarray | None = None,
+    rings: int = 2,
+    neighbourhood=None,
 ) -> np.ndarray:
     """Whether a self map reverses the surface's orientation around each vertex of ``rows``, ``(R,)`` in {-1, 0, 1}.
 
@@ -308,6 +313,8 @@ def orientation_reversal(
         vertex_map: ``(V,)`` the image of every vertex (-1: none).
         rows: the vertices to test (default: all).
         rings: the neighbourhood's size in edges, at least 1.
+        neighbourhood: the ``(V, V)`` CSR of :func:`~torchsym.mesh.operators.ring_neighbourhood`
+            for ``rings``, when the caller already has it (``rings`` is then ignored).
 
     Returns:
         ``(R,)`` int64.
@@ -348,7 +355,11 @@ def orientation_reversal(
     e1 = np.cross(normal, helper)
     e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
     e2 = np.cross(normal, e1)
-    reach = ring_neighbourhood(faces, n, rings=rings)[rows].tocoo()  # (R, V)
+    if neighbourhood is None:
+        neighbourhood = ring_neighbourhood(faces, n, rings=rings)
+    elif getattr(neighbourhood, "shape", None) != (n, n):
+        raise InputShapeError(f"neighbourhood: expected a ({n}, {n}) sparse matrix, got {getattr(neighbourhood, 'shape', None)}")
+    reach = neighbourhood.tocsr()[rows].tocoo()  # (R, V)
     centre, nbr = rows[reach.row], reach.col  # one entry per (row, neighbour)
     off = v[nbr] - v[centre]  # (E, 3)
     img = v[vmap[nbr]] - v[vmap[centre]]  # (E, 3)
