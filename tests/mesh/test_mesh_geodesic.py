@@ -3,8 +3,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from torchsym.mesh import edge_graph, geodesic_distances, shortest_paths, thin_points
+from torchsym.errors import InputShapeError
+from torchsym.mesh import edge_graph, geodesic_distances, shortest_paths, surface_geodesic_lengths, thin_points
 from torchsym.mesh.synthetic import icosphere
+
+
+def flat_grid(n: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """A unit square of (n + 1)^2 vertices, every cell cut by the same diagonal."""
+    xs, ys = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+    v = np.stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)], axis=1)
+    idx = np.arange(v.shape[0]).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    return v, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
 
 
 @pytest.fixture(scope="module")
@@ -43,3 +53,38 @@ class TestGeodesic:
         near = int(np.argsort(np.linalg.norm(v - v[0], axis=1))[1])
         assert thin_points(g, np.array([0, near, anti]), 0.5).tolist() == [0, anti]
         assert thin_points(g, np.array([0, near]), 0.0).tolist() == [0, near]
+
+
+class TestSurfaceGeodesic:
+    def test_flat_is_euclidean(self):
+        v, f = flat_grid()
+        g = edge_graph(v, f)
+        pairs = np.array([[0, 13 * 5 + 2], [0, 13 * 2 + 5], [7, 13 * 11 + 2], [40, 40]])
+        lengths = surface_geodesic_lengths(v, f, pairs)
+        straight = np.linalg.norm(v[pairs[:, 0]] - v[pairs[:, 1]], axis=1)
+        np.testing.assert_allclose(lengths, straight, atol=1e-9)
+        edges = geodesic_distances(g, pairs[:, 0])[np.arange(4), pairs[:, 1]]
+        # the pairs off the grid's directions are longer along edges
+        assert (edges[:3] > straight[:3] * 1.05).all() and lengths[3] == 0.0
+
+    def test_sphere_between_great_circle_and_edges(self, sphere):
+        v, f, g = sphere
+        rng = np.random.default_rng(0)
+        pairs = rng.integers(0, v.shape[0], size=(30, 2))
+        lengths = surface_geodesic_lengths(v, f, pairs)
+        edges = geodesic_distances(g, pairs[:, 0])[np.arange(30), pairs[:, 1]]
+        arc = np.arccos(np.clip((v[pairs[:, 0]] * v[pairs[:, 1]]).sum(1), -1, 1))
+        assert (lengths <= edges + 1e-9).all()
+        # the icosphere lies inside the unit sphere: its geodesics are a little shorter
+        assert (lengths <= arc + 1e-9).all() and (lengths >= 0.97 * arc).all()
+        assert np.median(edges / np.where(lengths > 0, lengths, 1)) > 1.02
+
+    def test_components_and_exception(self):
+        v, f = flat_grid(4)
+        v2, f2 = np.concatenate([v, v + 5.0]), np.concatenate([f, f + v.shape[0]])
+        out = surface_geodesic_lengths(v2, f2, np.array([[0, v.shape[0] + 3], [0, 6]]))
+        assert np.isinf(out[0]) and out[1] == pytest.approx(np.linalg.norm(v[6] - v[0]))
+        with pytest.raises(InputShapeError, match=r"pairs: expected \(P, 2\) vertex pairs, got \(3,\)"):
+            surface_geodesic_lengths(v, f, np.array([0, 1, 2]))
+        with pytest.raises(InputShapeError, match=r"pairs: expected vertex indices in \[0, 24\], got \[0, 25\]"):
+            surface_geodesic_lengths(v, f, np.array([[0, 25]]))

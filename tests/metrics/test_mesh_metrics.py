@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputShapeError
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.mesh import Mesh
 from torchsym.mesh.synthetic import icosphere
 from torchsym.metrics.mesh import correspondence_rate, mesh_rate, symmetry_threshold
 
@@ -44,6 +45,33 @@ class TestCorrespondenceRate:
         assert score.num_evaluated == 10 and score.rate == pytest.approx(0.9)
         assert torch.isinf(score.errors[3])
 
+    def test_surface_against_edges(self):
+        # a flat strip: vertex 0's true mirror is at 45 degrees to the grid, 0.30 away in
+        # the plane (under the tolerance) but 0.42 along the edges (over it)
+        n = 10
+        xs, ys = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+        v = np.stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)], axis=1)
+        idx = np.arange(v.shape[0]).reshape(n + 1, n + 1)
+        a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+        mesh = Mesh(torch.from_numpy(v), torch.from_numpy(np.concatenate([np.stack([a, b, d], 1), np.stack([b, c, d], 1)])))
+        thr = symmetry_threshold(mesh)  # sqrt(1 / 20 pi) = 0.126
+        gt = np.full(v.shape[0], -1)
+        gt[idx[5, 5]] = idx[5, 5]
+        gt[idx[2, 2]] = idx[2, 2]
+        pred = np.arange(v.shape[0])
+        pred[idx[5, 5]] = idx[6, 6]  # 0.141 straight (over), 0.2 along edges
+        pred[idx[2, 2]] = idx[3, 2]  # 0.1 straight and along an edge (under)
+        surface = correspondence_rate(mesh, pred, ground_truth=gt)
+        edges = correspondence_rate(mesh, pred, ground_truth=gt, geodesics="edges")
+        assert edges.geodesics == "edges" and surface.geodesics == "surface"
+        assert edges.rate == 0.5 and surface.rate == 0.5
+        # with the tolerance between the straight 0.141 and the edge path 0.2, only the surface counts it
+        surface = correspondence_rate(mesh, pred, ground_truth=gt, threshold=0.15)
+        edges = correspondence_rate(mesh, pred, ground_truth=gt, threshold=0.15, geodesics="edges")
+        assert edges.rate == 0.5 and surface.rate == 1.0
+        assert float(surface.errors[1]) == pytest.approx(math.sqrt(0.02), abs=1e-9) and float(edges.errors[1]) == pytest.approx(0.2)
+        assert thr == pytest.approx(math.sqrt(1 / (20 * math.pi)))
+
     def test_exception(self, sphere):
         s, gt = sphere
         with pytest.raises(InputShapeError, match=r"predicted: expected \(642,\) to match the mesh's vertices, got \(3,\)"):
@@ -52,6 +80,8 @@ class TestCorrespondenceRate:
             correspondence_rate(s, gt)
         with pytest.raises(InputShapeError, match=r"landmarks: expected \(L, 2\) vertex pairs"):
             correspondence_rate(s, gt, landmarks=np.zeros((4, 3), dtype=int))
+        with pytest.raises(InputValueError, match="geodesics: expected one of 'surface', 'edges', got 'exact'"):
+            correspondence_rate(s, gt, ground_truth=gt, geodesics="exact")
 
 
 def test_mesh_rate():

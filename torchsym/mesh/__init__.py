@@ -5,7 +5,7 @@ from torchsym.mesh.correction import (
     correct_eigenfunctions,
     correction_cost,
 )
-from torchsym.mesh.geodesic import geodesic_distances, shortest_paths, thin_points
+from torchsym.mesh.geodesic import geodesic_distances, shortest_paths, surface_geodesic_lengths, thin_points
 from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
 from torchsym.mesh.intrinsic import (
     IntrinsicSymmetry,
@@ -79,6 +79,7 @@ __all__ = [
     "resolvent_mask",
     "ring_neighbourhood",
     "shortest_paths",
+    "surface_geodesic_lengths",
     "symmetric_pairs",
     "symmetry_colors",
     "thin_points",

@@ -4,8 +4,12 @@ A predicted correspondence ``x -> y`` is correct when the geodesic distance from
 the ground-truth symmetric vertex of ``x`` is below ``sqrt(area / (20 pi))``. The
 correspondence rate of a mesh is the share of correct correspondences among the
 evaluated ones; the mesh rate of a data set is the share of meshes whose rate exceeds
-75 %. Geodesic distances are shortest paths along mesh edges (Dijkstra), which slightly
-over-estimate the surface distance, so rates are on the conservative side.
+75 %. Geodesic distances are measured on the surface (``geodesics="surface"``, default):
+the shortest edge path (Dijkstra), straightened into a geodesic across the faces by
+potpourri3d's FlipOut wherever the edge path alone is not short enough to count as
+correct. ``geodesics="edges"`` keeps the edge-path lengths, which over-estimate the
+surface distance (by a median 7.8 % near the tolerance, up to 77 %) and so give lower,
+conservative rates.
 """
 
 from __future__ import annotations
@@ -19,8 +23,8 @@ import numpy as np
 import torch
 
 from torchsym.core.results import Result
-from torchsym.errors import InputShapeError
-from torchsym.mesh.geodesic import geodesic_distances
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.mesh.geodesic import geodesic_distances, surface_geodesic_lengths
 from torchsym.mesh.mesh import Mesh
 from torchsym.mesh.operators import edge_graph, face_areas
 
@@ -49,13 +53,21 @@ class CorrespondenceScore(Result):
         num_evaluated: correspondences evaluated (those with a ground truth and a prediction).
         threshold: the geodesic tolerance used.
         errors: ``(num_evaluated,)`` geodesic distance from each prediction to its ground
-            truth, ``inf`` beyond ``2 * threshold`` (not searched further).
+            truth, ``inf`` beyond ``2 * threshold`` (not searched further). With
+            ``geodesics="surface"`` the errors from ``threshold`` up are surface geodesic
+            lengths and those below it edge-path lengths (an upper bound, already small
+            enough to count as correct).
+        geodesics: how distances were measured, ``"surface"`` or ``"edges"``.
     """
 
     rate: float
     num_evaluated: int
     threshold: float
     errors: torch.Tensor
+    geodesics: str = "surface"
+
+
+_GEODESICS = ("surface", "edges")
 
 
 def correspondence_rate(
@@ -65,6 +77,7 @@ def correspondence_rate(
     ground_truth: Any | None = None,
     landmarks: Any | None = None,
     threshold: float | None = None,
+    geodesics: str = "surface",
 ) -> CorrespondenceScore:
     """Correspondence rate of a predicted symmetric map on one mesh (Sec. 6.3.2).
 
@@ -80,10 +93,18 @@ def correspondence_rate(
         ground_truth: dense ground-truth map.
         landmarks: ground-truth landmark pairs.
         threshold: geodesic tolerance; ``sqrt(area / (20 pi))`` when None.
+        geodesics: ``"surface"`` (default): geodesic distance on the surface, as Sec. 6.3.2
+            and Kim et al. 2010 define the error; each edge-graph distance at or above the
+            tolerance (and below twice it) is replaced by the length of the FlipOut geodesic
+            between the same vertices (:func:`~torchsym.mesh.geodesic.surface_geodesic_lengths`),
+            which is never longer, so the rate equals that of straightening every path.
+            ``"edges"``: edge-graph distances only (Dijkstra), faster and stricter.
 
     Returns:
         A :class:`CorrespondenceScore`.
     """
+    if geodesics not in _GEODESICS:
+        raise InputValueError(f"geodesics: expected one of {', '.join(map(repr, _GEODESICS))}, got {geodesics!r}")
     n = mesh.num_vertices
     pred = _np(predicted, np.int64).ravel()
     if pred.shape[0] != n:
@@ -115,8 +136,15 @@ def correspondence_rate(
         starts, inv = np.unique(guess[have], return_inverse=True)
         dist = geodesic_distances(graph, starts, limit=2.0 * thr)  # (S, V)
         errors[have] = dist[inv, dst[have]]
+    if geodesics == "surface":
+        near = np.flatnonzero((errors >= thr) & np.isfinite(errors))  # only these can change the rate
+        if near.size:
+            pairs = np.stack([guess[near], dst[near]], axis=1)  # (P, 2)
+            errors[near] = np.minimum(errors[near], surface_geodesic_lengths(v, f, pairs))
     rate = float((errors < thr).mean()) if errors.size else float("nan")
-    return CorrespondenceScore(rate=rate, num_evaluated=int(errors.size), threshold=thr, errors=torch.from_numpy(errors))
+    return CorrespondenceScore(
+        rate=rate, num_evaluated=int(errors.size), threshold=thr, errors=torch.from_numpy(errors), geodesics=geodesics
+    )
 
 
 def mesh_rate(rates: Sequence[float], *, minimum: float = 0.75) -> float:
