@@ -3,8 +3,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from torchsym.errors import InputShapeError
-from torchsym.mesh import edge_graph, geodesic_distances, shortest_paths, surface_geodesic_lengths, thin_points
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.mesh import (
+    edge_graph,
+    geodesic_distances,
+    shortest_paths,
+    split_fans,
+    surface_geodesic_lengths,
+    thin_points,
+)
 from torchsym.mesh.synthetic import icosphere
 
 
@@ -88,3 +95,29 @@ class TestSurfaceGeodesic:
             surface_geodesic_lengths(v, f, np.array([0, 1, 2]))
         with pytest.raises(InputShapeError, match=r"pairs: expected vertex indices in \[0, 24\], got \[0, 25\]"):
             surface_geodesic_lengths(v, f, np.array([[0, 25]]))
+
+    def test_bow_tie(self):
+        # two squares of the grid touching at one vertex (an hourglass), and a loose vertex
+        v, f = flat_grid(4)
+        keep = [t for t in range(f.shape[0]) if max(v[f[t], 0].max(), v[f[t], 1].max()) <= 0.5
+                or min(v[f[t], 0].min(), v[f[t], 1].min()) >= 0.5]
+        f = f[keep]
+        pinch = 2 * 5 + 2  # (0.5, 0.5)
+        out = surface_geodesic_lengths(v, f, np.array([[0, 24], [0, pinch], [pinch, 24], [0, 4]]))
+        # no path crosses the pinch: the pinched vertex belongs to its first fan (lower left)
+        assert out[1] == pytest.approx(np.sqrt(0.5), abs=1e-9)
+        assert np.isinf(out[0]) and np.isinf(out[2])
+        assert np.isinf(out[3])  # vertex 4, (0, 1), lies in no kept triangle
+
+    def test_split_fans(self):
+        v, f = flat_grid(2)  # 9 vertices, the centre 4 shared by every cell
+        faces, origin = split_fans(f, 9)
+        np.testing.assert_array_equal(faces, f)
+        np.testing.assert_array_equal(origin, np.arange(9))
+        tie = f[[0, 7]]  # lower-left and upper-right triangles, touching at the centre only
+        faces, origin = split_fans(tie, 9)
+        assert origin.tolist() == sorted(origin.tolist()) and (origin == 4).sum() == 2
+        np.testing.assert_array_equal(origin[faces], tie)
+        assert len(set(faces[0]) & set(faces[1])) == 0
+        with pytest.raises(InputValueError, match=r"faces: expected every edge in at most two triangles, got edge \[0, 4\] in 3"):
+            split_fans(np.concatenate([f[[0, 4]], [[0, 4, 2]]]), 9)

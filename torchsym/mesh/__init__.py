@@ -5,7 +5,13 @@ from torchsym.mesh.correction import (
     correct_eigenfunctions,
     correction_cost,
 )
-from torchsym.mesh.geodesic import geodesic_distances, shortest_paths, surface_geodesic_lengths, thin_points
+from torchsym.mesh.geodesic import (
+    geodesic_distances,
+    shortest_paths,
+    split_fans,
+    surface_geodesic_lengths,
+    thin_points,
+)
 from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
 from torchsym.mesh.intrinsic import (
     IntrinsicSymmetry,
@@ -79,6 +85,7 @@ __all__ = [
     "resolvent_mask",
     "ring_neighbourhood",
     "shortest_paths",
+    "split_fans",
     "surface_geodesic_lengths",
     "symmetric_pairs",
     "symmetry_colors",
