@@ -121,3 +121,5 @@ class TestSurfaceGeodesic:
         assert len(set(faces[0]) & set(faces[1])) == 0
         with pytest.raises(InputValueError, match=r"faces: expected every edge in at most two triangles, got edge \[0, 4\] in 3"):
             split_fans(np.concatenate([f[[0, 4]], [[0, 4, 2]]]), 9)
+        with pytest.raises(InputShapeError, match=r"faces: expected vertex indices in \[0, 7\], got \[0, 8\]"):
+            split_fans(f, 8)

@@ -21,6 +21,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from torchsym.errors import InputShapeError, InputValueError
+from torchsym.mesh.operators import _pair_keys
 
 __all__ = ["geodesic_distances", "shortest_paths", "split_fans", "surface_geodesic_lengths", "thin_points"]
 
@@ -114,18 +115,23 @@ def split_fans(faces: np.ndarray, num_vertices: int) -> tuple[np.ndarray, np.nda
         the input's vertex order.
 
     Raises:
+        InputShapeError: a face names a vertex outside ``[0, V)``.
         InputValueError: an edge lies in more than two triangles.
     """
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)  # (F, 3)
     nf = f.shape[0]
     if nf == 0:
         return f, np.zeros(0, dtype=np.int64)
+    if f.min() < 0 or f.max() >= num_vertices:
+        raise InputShapeError(f"faces: expected vertex indices in [0, {num_vertices - 1}], got [{f.min()}, {f.max()}]")
     corner_vertex = f.ravel()  # (3F,) corner 3 t + k of triangle t
     # each triangle side (k, k + 1): its two corners, and the undirected edge it lies on
     c_a = (3 * np.arange(nf)[:, None] + np.arange(3)).ravel()  # (3F,)
     c_b = (3 * np.arange(nf)[:, None] + (np.arange(3) + 1) % 3).ravel()  # (3F,)
     ends = np.sort(np.stack([corner_vertex[c_a], corner_vertex[c_b]], axis=1), axis=1)  # (3F, 2)
-    key = ends[:, 0] * num_vertices + ends[:, 1]
+    key = _pair_keys(ends)
+    if key is None:  # indices too large for one int64 key
+        key = np.unique(ends, axis=0, return_inverse=True)[1].ravel()
     order = np.argsort(key, kind="stable")
     k_sorted = key[order]
     _, first, counts = np.unique(k_sorted, return_index=True, return_counts=True)
