@@ -2,7 +2,7 @@
 geodesic lengths for evaluation.
 
 Edge-graph distances run along mesh edges, so they over-estimate the true geodesic
-distance (by a median 7.8 % and up to 77 % on pairs 1-2 tolerances apart on TOSCA's
+distance (by a median 7.4 % and up to 77 % on 200 pairs 1-2 tolerances apart on TOSCA's
 ``cat9``, against the exact distances of ``tvb-gdist``); paths are vertex sequences, which
 is what the sign test of Sec. 6.2.5 needs. :func:`surface_geodesic_lengths` shortens the
 edge path into a geodesic across the faces (potpourri3d's FlipOut), for the evaluation of

@@ -8,7 +8,7 @@ evaluated ones; the mesh rate of a data set is the share of meshes whose rate ex
 the shortest edge path (Dijkstra), straightened into a geodesic across the faces by
 potpourri3d's FlipOut wherever the edge path alone is not short enough to count as
 correct. ``geodesics="edges"`` keeps the edge-path lengths, which over-estimate the
-surface distance (by a median 7.8 % near the tolerance, up to 77 %) and so give lower,
+surface distance (by a median 7.4 % near the tolerance, up to 77 %) and so give lower,
 conservative rates.
 """
 
