@@ -49,9 +49,9 @@ class TestIntrinsicSymmetry:
 
         result, mesh, gt = solved
         c = result.refined_functional_map.numpy()
-        assert c.shape == (25, 25)
+        assert c.shape == (40, 40)  # polished (step 13) in polish_k eigenfunctions
         v = mesh.vertices.double().numpy()
-        _, phi = laplacian_eigen(v, mesh.faces.numpy(), 25)
+        _, phi = laplacian_eigen(v, mesh.faces.numpy(), 40)
         again = cKDTree(phi).query(phi @ c, k=1)[1]
         assert (again == result.map.numpy()).mean() > 0.99
         assert (result.map_before_refine.numpy() == gt).mean() > 0.95
@@ -662,3 +662,95 @@ class TestOrientationCheck:
         assert seen["refine_orientation"] == 12.5
         with pytest.raises(InputValueError, match="refine_orientation"):
             IntrinsicSymmetry(refine_orientation=-1.0)
+
+
+class TestPolish:
+    """Step 13: ZoomOut on into ``polish_k`` eigenfunctions, kept unless the orientation reversal falls."""
+
+    def test_default_polishes_to_40(self, solved):
+        result, mesh, gt = solved
+        assert result.refined_functional_map.shape == (40, 40) and "polish" in result.timings
+        assert correspondence_rate(mesh, result.map, ground_truth=gt).rate == 1.0
+        assert not any("polish_k" in n for n in result.notes)
+
+    @pytest.mark.parametrize("settings", [{"polish_iters": 0}, {"polish_k": 25}, {"refine_iters": 0}])
+    def test_off(self, blob, settings):
+        mesh, gt = blob
+        out = intrinsic_symmetry(mesh, **settings)
+        assert "polish" not in out.timings
+        assert out.refined_functional_map.shape == ((0, 0) if "refine_iters" in settings else (25, 25))
+        if "refine_iters" not in settings:
+            assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
+
+    def test_not_kept_when_the_orientation_reversal_falls(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # no share can rise by 2
+        out = intrinsic_symmetry(mesh)
+        assert out.refined_functional_map.shape == (25, 25) and "polish" in out.timings
+        assert any(n.startswith("ZoomOut to polish_k = 40 eigenfunctions not kept (orientation reversed at") for n in out.notes)
+        assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
+
+    def test_a_polish_that_drifts_home_is_not_kept(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, _ = blob
+        original = intrinsic._sampled_zoomout
+
+        def polish_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None):
+            if int(ks[0]) <= 25:  # steps 9 and 12
+                return original(big, area, rows, image, ks, trees, involution, oriented)
+            return rows.copy(), np.eye(int(ks[-1]))
+
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", polish_drifts_home)
+        kept = intrinsic_symmetry(mesh, polish_iters=1)
+        assert kept.refined_functional_map.shape == (25, 25)
+        assert any("not kept" in n for n in kept.notes)
+
+    def test_distortion_decides_without_a_winding(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, _ = blob
+        seen = []
+        original = intrinsic.GeodesicProbe.distortion
+
+        def spy(self, image):
+            seen.append(image.copy())
+            return original(self, image)
+
+        monkeypatch.setattr(intrinsic, "consistently_wound", lambda faces: False)
+        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", spy)
+        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # unused without a winding
+        out = intrinsic_symmetry(mesh)
+        assert any("not consistently wound" in n for n in out.notes)
+        assert len(seen) >= 2  # step 9's test, then the map before and after polishing
+        kept = out.refined_functional_map.shape == (40, 40)
+        assert kept != any("not kept (geodesic distortion" in n for n in out.notes)
+
+    def test_polish_k_lowered_on_a_small_mesh(self, blob):
+        mesh, gt = blob
+        n = mesh.num_vertices
+        out = intrinsic_symmetry(mesh, polish_k=5000, polish_iters=1)
+        assert any(f"polish_k lowered from 5000 to {n - 1}" in note for note in out.notes)
+        assert out.refined_functional_map.shape in ((n - 1, n - 1), (25, 25))
+
+    def test_bad_settings_and_the_module(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        with pytest.raises(InputValueError, match="polish_iters"):
+            intrinsic_symmetry(blob[0], polish_iters=-1)
+        with pytest.raises(InputValueError, match="polish_k"):
+            intrinsic_symmetry(blob[0], polish_k=0)
+        with pytest.raises(InputValueError, match="polish_k"):
+            IntrinsicSymmetry(polish_k=1.5)
+        seen = {}
+        original = intrinsic.intrinsic_symmetry
+
+        def spy(mesh, **kw):
+            seen.update(kw)
+            return original(mesh, **kw)
+
+        monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+        IntrinsicSymmetry(polish_k=30, polish_iters=2)(blob[0])
+        assert seen["polish_k"] == 30 and seen["polish_iters"] == 2
