@@ -18,6 +18,21 @@ from torchsym.mesh import (
 from torchsym.metrics.mesh import correspondence_rate
 
 
+
+def _record_settings(monkeypatch) -> dict:
+    """Record the settings the module passes on to ``intrinsic_symmetry`` (the dict fills on each call)."""
+    from torchsym.mesh import intrinsic
+
+    seen: dict = {}
+    original = intrinsic.intrinsic_symmetry
+
+    def spy(mesh, **kw):
+        seen.update(kw)
+        return original(mesh, **kw)
+
+    monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+    return seen
+
 @pytest.fixture(scope="module")
 def solved(blob):
     mesh, gt = blob
@@ -648,16 +663,7 @@ class TestOrientationCheck:
         assert any("refine_k > 50" in n for n in out.notes)
 
     def test_module_forwards_and_checks_the_weight(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
-
-        seen = {}
-        original = intrinsic.intrinsic_symmetry
-
-        def spy(mesh, **kw):
-            seen.update(kw)
-            return original(mesh, **kw)
-
-        monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+        seen = _record_settings(monkeypatch)
         IntrinsicSymmetry(refine_orientation=12.5)(blob[0])
         assert seen["refine_orientation"] == 12.5
         with pytest.raises(InputValueError, match="refine_orientation"):
@@ -736,21 +742,12 @@ class TestPolish:
         assert out.refined_functional_map.shape in ((n - 1, n - 1), (25, 25))
 
     def test_bad_settings_and_the_module(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
-
         with pytest.raises(InputValueError, match="polish_iters"):
             intrinsic_symmetry(blob[0], polish_iters=-1)
         with pytest.raises(InputValueError, match="polish_k"):
             intrinsic_symmetry(blob[0], polish_k=0)
         with pytest.raises(InputValueError, match="polish_k"):
             IntrinsicSymmetry(polish_k=1.5)
-        seen = {}
-        original = intrinsic.intrinsic_symmetry
-
-        def spy(mesh, **kw):
-            seen.update(kw)
-            return original(mesh, **kw)
-
-        monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+        seen = _record_settings(monkeypatch)
         IntrinsicSymmetry(polish_k=30, polish_iters=2)(blob[0])
         assert seen["polish_k"] == 30 and seen["polish_iters"] == 2
