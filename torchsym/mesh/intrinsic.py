@@ -1051,17 +1051,24 @@ def intrinsic_symmetry(
         vmap = trees[int(ks[-1])].query(big[:, : ks[-1]] @ full, k=1, workers=-1)[1].astype(np.int64)
         timings["refine"] = time.perf_counter() - tic
     rescued = False
+
+    def reversed_share(vertex_map: np.ndarray) -> float:
+        # share of the sampled vertices around which the map reverses the orientation
+        return float(np.mean(orientation_reversal(v, f, vertex_map, rows, neighbourhood=two_ring) < 0))
+
+    wound = bool(refine_iters) and (refine_orientation > 0 or polish) and consistently_wound(f)
+    vmap_share = None  # reversed_share(vmap) once known
     check_orientation = bool(refine_iters) and refine_orientation > 0 and (chosen.refined is not None or chosen.usable)
     if check_orientation and refine_k > _ORIENTATION_MAX_K:
         check_orientation = False
         notes.append(f"orientation check skipped: its dense penalty grows as refine_k^4, and refine_k > {_ORIENTATION_MAX_K}")
-    if check_orientation and not consistently_wound(f):
+    if check_orientation and not wound:
         check_orientation = False
         notes.append("orientation check skipped: the faces are not consistently wound, so the orientation is undefined")
     if check_orientation:
         # step 12: a reflection reverses the surface's orientation
         tic = time.perf_counter()
-        share = float(np.mean(orientation_reversal(v, f, vmap, rows, neighbourhood=two_ring) < 0))
+        share = vmap_share = reversed_share(vmap)
         if chosen.refined is None:  # no hypothesis passed the tests: start from each one's own map
             starts = [(ks, cand.start) for cand in candidates if cand.start is not None]
         elif share < _KEEPS_ORIENTATION:  # the map keeps the orientation on most of the shape
@@ -1085,11 +1092,12 @@ def intrinsic_symmetry(
                     if probe.near_self(image) >= _REORIENTED_NEAR_SELF or not probe.distortion(image) < limit:
                         continue
                     trial = trees[int(ks[-1])].query(big[:, : ks[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
-                    trial_share = float(np.mean(orientation_reversal(v, f, trial, rows, neighbourhood=two_ring) < 0))
+                    trial_share = reversed_share(trial)
                     if trial_share >= best_share:
                         best_share, found = trial_share, (trial, fitted)
             if found is not None:
                 vmap, full = found
+                vmap_share = best_share
                 rescued = chosen.refined is None
                 notes.append(
                     ("no hypothesis passed the tests of an isometric involution; refined" if rescued else
@@ -1111,9 +1119,9 @@ def intrinsic_symmetry(
             trees.setdefault(int(kk), cKDTree(big[:, :kk]))
         image, fitted = _sampled_zoomout(big, area, rows, vmap[rows], schedule, trees, refine_involution)
         trial = trees[int(schedule[-1])].query(big[:, : schedule[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
-        if consistently_wound(f):
-            before = float(np.mean(orientation_reversal(v, f, vmap, rows, neighbourhood=two_ring) < 0))
-            after = float(np.mean(orientation_reversal(v, f, trial, rows, neighbourhood=two_ring) < 0))
+        if wound:
+            before = reversed_share(vmap) if vmap_share is None else vmap_share  # step 12's figure when it ran
+            after = reversed_share(trial)
             keep, test = after >= before - _POLISH_ORIENTATION_DROP, f"orientation reversed at {before:.0%} -> {after:.0%}"
         else:  # orientation undefined: the geodesic test instead
             before, after = probe.distortion(vmap[rows]), probe.distortion(image)
