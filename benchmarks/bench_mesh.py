@@ -29,6 +29,7 @@ the eigendecomposition alone beside it. A timing row runs the mirror-completed
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import logging
 import math
@@ -59,6 +60,9 @@ log = logging.getLogger("bench_mesh")
 HERE = Path(__file__).resolve().parent
 SYNTHETIC = ["man", "mannequin-devil", "camel", "elephant", "cow", "bull", "lion", "dino", "elk",
              "homer", "triceratops", "pig"]
+
+
+_DEFAULT_REFINE_K = inspect.signature(intrinsic_symmetry).parameters["refine_k"].default
 
 
 def most_symmetric_axis(v: np.ndarray) -> int:
@@ -183,6 +187,11 @@ def evaluate(items, use_pyfm: bool) -> dict:
             row["no_orientation_check"] = correspondence_rate(
                 mesh, intrinsic_symmetry(mesh, refine_orientation=0.0).map, ground_truth=gt
             ).rate
+        # ablation: without step 13, the polish to polish_k eigenfunctions (the same map where it was not kept)
+        row["polished"] = int(res.refined_functional_map.shape[0]) > _DEFAULT_REFINE_K
+        row["no_polish"] = ours
+        if row["polished"]:
+            row["no_polish"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, polish_iters=0).map, ground_truth=gt).rate
         # ablation: without closing the holes first (the same map on a closed mesh)
         row["holes_closed"] = res.holes_closed
         row["no_fill"] = ours
@@ -213,6 +222,9 @@ def evaluate(items, use_pyfm: bool) -> dict:
         "no_orientation_check_rate": float(np.mean([r["no_orientation_check"] for r in rows])) if rows else float("nan"),
         "no_orientation_check_mesh_rate": mesh_rate([r["no_orientation_check"] for r in rows]) if rows else float("nan"),
         "reoriented": sum(r["reoriented"] for r in rows),
+        "no_polish_rate": float(np.mean([r["no_polish"] for r in rows])) if rows else float("nan"),
+        "no_polish_mesh_rate": mesh_rate([r["no_polish"] for r in rows]) if rows else float("nan"),
+        "polished": sum(r["polished"] for r in rows),
         "failed": sum("distortion_ours" in r for r in rows),
         "failed_truth_less_isometric": sum(
             r["distortion_truth"] > r["distortion_ours"] and r["near_self"] < 0.6 for r in rows if "near_self" in r
@@ -271,7 +283,8 @@ def render(results: dict, timing: dict) -> str:
             "often it was chosen; torchsym without closing "
             "the holes first (`fill_holes=False`; the same run on meshes without holes), and on how "
             "many meshes holes were closed; torchsym without the orientation check of its final map "
-            "(`refine_orientation=0`), and on how many meshes that check refined the map again (or rescued it where no hypothesis passed). Failed: meshes at or below "
+            "(`refine_orientation=0`), and on how many meshes that check refined the map again (or rescued it where no hypothesis passed); torchsym without step 13, the polish from 25 to 40 "
+            "eigenfunctions (`polish_iters=0`), and on how many meshes the polished map was kept. Failed: meshes at or below "
             "75 %, and on how many of them the ground-truth map distorts geodesics more than ours "
             "(mean relative error of 60 x 600 sampled distances) while ours is no partial identity "
             "(under 60 % of 100 vertices left within the tolerance of themselves): there the ground "
@@ -285,9 +298,10 @@ def render(results: dict, timing: dict) -> str:
             "| pairs only rate % | orientation chosen | without extrinsic rate % (extrinsic chosen) "
             "| without hole filling rate % (meshes filled) "
             "| without orientation check rate % / mesh rate % (re-refined) "
+            "| without polish rate % / mesh rate % (polished) "
             "| pyFM rate % (along edges) | pyFM mesh rate % | torchsym median s | eigendecomposition median s | pyFM median s |"
         ),
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, res in results.items():
         s = res["summary"]
@@ -300,6 +314,8 @@ def render(results: dict, timing: dict) -> str:
             f"{fmt(s.get('no_fill_rate', float('nan')), True)} ({s.get('holes_closed', '-')}) | "
             f"{fmt(s.get('no_orientation_check_rate', float('nan')), True)} / "
             f"{fmt(s.get('no_orientation_check_mesh_rate', float('nan')), True)} ({s.get('reoriented', '-')}) | "
+            f"{fmt(s.get('no_polish_rate', float('nan')), True)} / "
+            f"{fmt(s.get('no_polish_mesh_rate', float('nan')), True)} ({s.get('polished', '-')}) | "
             f"{fmt(s.get('pyfm_rate', float('nan')), True)} ({fmt(s.get('pyfm_edges_rate', float('nan')), True)}) | "
             f"{fmt(s.get('pyfm_mesh_rate', float('nan')), True)} | "
             f"{fmt(s['ours_median_time'])} | {fmt(s['eigen_median_time'])} | {fmt(s.get('pyfm_median_time', float('nan')))} |"

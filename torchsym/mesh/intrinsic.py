@@ -763,8 +763,8 @@ def intrinsic_symmetry(
             wrong maps win (cat10 0.83 -> 0.32) and the orientation penalty of step 12 grows
             as its fourth power. After the choice the larger basis follows the finer
             non-isometric deformation. With ``polish_k = 40`` in 3 rounds, on the benchmark
-            (``benchmarks/bench_mesh.py --faust-tosca``, every shape; against the previous
-            run, identical but for this step) the correspondence rate rose from 98.8 to
+            (``benchmarks/bench_mesh.py --faust-tosca``, every shape; its column "without
+            polish" runs ``polish_iters = 0`` side by side) the correspondence rate rose from 98.8 to
             99.1 % on FAUST (``tr_reg_054`` 0.97 -> 1.00, ``067`` 0.95 -> 0.99; worst loss
             ``048`` 0.86 -> 0.83), 97.3 to 97.7 % on TOSCA (cat6 0.94 -> 0.99, michael18
             0.94 -> 0.99; dog10 0.94 -> 0.88), 91.6 to 92.1 % on the synthetic meshes, and
