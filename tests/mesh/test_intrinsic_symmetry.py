@@ -18,7 +18,6 @@ from torchsym.mesh import (
 from torchsym.metrics.mesh import correspondence_rate
 
 
-
 def _record_settings(monkeypatch) -> dict:
     """Record the settings the module passes on to ``intrinsic_symmetry`` (the dict fills on each call)."""
     from torchsym.mesh import intrinsic
@@ -32,6 +31,7 @@ def _record_settings(monkeypatch) -> dict:
 
     monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
     return seen
+
 
 @pytest.fixture(scope="module")
 def solved(blob):
@@ -714,25 +714,28 @@ class TestPolish:
         assert kept.refined_functional_map.shape == (25, 25)
         assert any("not kept" in n for n in kept.notes)
 
-    def test_distortion_decides_without_a_winding(self, blob, monkeypatch):
+    @pytest.mark.parametrize("rising", [True, False])
+    def test_distortion_decides_without_a_winding(self, blob, monkeypatch, rising):
+        """Without a consistent winding the geodesic distortion decides: the probe here reports
+        a distortion that rises (or falls) with every call, so the polished map, measured
+        after the map it came from, is rejected (or kept) whatever the orientation says."""
         from torchsym.mesh import intrinsic
 
-        mesh, _ = blob
-        seen = []
-        original = intrinsic.GeodesicProbe.distortion
+        mesh, gt = blob
+        calls = []
 
-        def spy(self, image):
-            seen.append(image.copy())
-            return original(self, image)
+        def fake(self, image):
+            calls.append(1)
+            return (1e-4 * len(calls)) if rising else (0.1 - 1e-4 * len(calls))
 
         monkeypatch.setattr(intrinsic, "consistently_wound", lambda faces: False)
-        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", spy)
-        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # unused without a winding
+        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", fake)
+        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # would reject every polish if used
         out = intrinsic_symmetry(mesh)
         assert any("not consistently wound" in n for n in out.notes)
-        assert len(seen) >= 2  # step 9's test, then the map before and after polishing
-        kept = out.refined_functional_map.shape == (40, 40)
-        assert kept != any("not kept (geodesic distortion" in n for n in out.notes)
+        rejected = any(n.startswith("ZoomOut to polish_k = 40 eigenfunctions not kept (geodesic distortion") for n in out.notes)
+        assert rejected == rising
+        assert out.refined_functional_map.shape == ((25, 25) if rising else (40, 40))
 
     def test_polish_k_lowered_on_a_small_mesh(self, blob):
         mesh, gt = blob

@@ -1116,7 +1116,8 @@ def intrinsic_symmetry(
         tic = time.perf_counter()
         schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:]
         for kk in schedule:
-            trees.setdefault(int(kk), cKDTree(big[:, :kk]))
+            if int(kk) not in trees:  # (setdefault would build the tree even when it exists)
+                trees[int(kk)] = cKDTree(big[:, :kk])
         image, fitted = _sampled_zoomout(big, area, rows, vmap[rows], schedule, trees, refine_involution)
         trial = trees[int(schedule[-1])].query(big[:, : schedule[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
         if wound:
