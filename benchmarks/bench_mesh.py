@@ -192,6 +192,11 @@ def evaluate(items, use_pyfm: bool) -> dict:
         row["no_polish"] = ours
         if row["polished"]:
             row["no_polish"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, polish_iters=0).map, ground_truth=gt).rate
+        # ablation: without step 14, the realignment by distances to anchors (the same map where it was not kept)
+        row["realigned"] = any(n.startswith("realigned by") for n in res.notes)
+        row["no_realign"] = ours
+        if row["realigned"]:
+            row["no_realign"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, realign_anchors=0).map, ground_truth=gt).rate
         # ablation: without closing the holes first (the same map on a closed mesh)
         row["holes_closed"] = res.holes_closed
         row["no_fill"] = ours
@@ -225,6 +230,9 @@ def evaluate(items, use_pyfm: bool) -> dict:
         "no_polish_rate": float(np.mean([r["no_polish"] for r in rows])) if rows else float("nan"),
         "no_polish_mesh_rate": mesh_rate([r["no_polish"] for r in rows]) if rows else float("nan"),
         "polished": sum(r["polished"] for r in rows),
+        "no_realign_rate": float(np.mean([r["no_realign"] for r in rows])) if rows else float("nan"),
+        "no_realign_mesh_rate": mesh_rate([r["no_realign"] for r in rows]) if rows else float("nan"),
+        "realigned": sum(r["realigned"] for r in rows),
         "failed": sum("distortion_ours" in r for r in rows),
         "failed_truth_less_isometric": sum(
             r["distortion_truth"] > r["distortion_ours"] and r["near_self"] < 0.6 for r in rows if "near_self" in r
@@ -284,7 +292,9 @@ def render(results: dict, timing: dict) -> str:
             "the holes first (`fill_holes=False`; the same run on meshes without holes), and on how "
             "many meshes holes were closed; torchsym without the orientation check of its final map "
             "(`refine_orientation=0`), and on how many meshes that check refined the map again (or rescued it where no hypothesis passed); torchsym without step 13, the polish from 25 to 40 "
-            "eigenfunctions (`polish_iters=0`), and on how many meshes the polished map was kept. Failed: meshes at or below "
+            "eigenfunctions (`polish_iters=0`), and on how many meshes the polished map was kept; torchsym without "
+            "step 14, the realignment by distances to anchors (`realign_anchors=0`), and on how many meshes the "
+            "realigned map was kept. Failed: meshes at or below "
             "75 %, and on how many of them the ground-truth map distorts geodesics more than ours "
             "(mean relative error of 60 x 600 sampled distances) while ours is no partial identity "
             "(under 60 % of 100 vertices left within the tolerance of themselves): there the ground "
@@ -299,9 +309,10 @@ def render(results: dict, timing: dict) -> str:
             "| without hole filling rate % (meshes filled) "
             "| without orientation check rate % / mesh rate % (re-refined) "
             "| without polish rate % / mesh rate % (polished) "
+            "| without realign rate % / mesh rate % (realigned) "
             "| pyFM rate % (along edges) | pyFM mesh rate % | torchsym median s | eigendecomposition median s | pyFM median s |"
         ),
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, res in results.items():
         s = res["summary"]
@@ -316,6 +327,8 @@ def render(results: dict, timing: dict) -> str:
             f"{fmt(s.get('no_orientation_check_mesh_rate', float('nan')), True)} ({s.get('reoriented', '-')}) | "
             f"{fmt(s.get('no_polish_rate', float('nan')), True)} / "
             f"{fmt(s.get('no_polish_mesh_rate', float('nan')), True)} ({s.get('polished', '-')}) | "
+            f"{fmt(s.get('no_realign_rate', float('nan')), True)} / "
+            f"{fmt(s.get('no_realign_mesh_rate', float('nan')), True)} ({s.get('realigned', '-')}) | "
             f"{fmt(s.get('pyfm_rate', float('nan')), True)} ({fmt(s.get('pyfm_edges_rate', float('nan')), True)}) | "
             f"{fmt(s.get('pyfm_mesh_rate', float('nan')), True)} | "
             f"{fmt(s['ours_median_time'])} | {fmt(s['eigen_median_time'])} | {fmt(s.get('pyfm_median_time', float('nan')))} |"

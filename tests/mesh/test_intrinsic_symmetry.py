@@ -754,3 +754,89 @@ class TestPolish:
         seen = _record_settings(monkeypatch)
         IntrinsicSymmetry(polish_k=30, polish_iters=2)(blob[0])
         assert seen["polish_k"] == 30 and seen["polish_iters"] == 2
+
+
+class TestRealign:
+    """Step 14: realignment by distances to anchors, kept only when the orientation reversal clearly rises."""
+
+    def test_nearest_profiles_is_exact(self):
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh.intrinsic import _nearest_profiles
+
+        rng = np.random.default_rng(0)
+        data = rng.standard_normal((700, 64))
+        queries = data[rng.choice(700, 300)] + 0.05 * rng.standard_normal((300, 64))
+        np.testing.assert_array_equal(_nearest_profiles(queries, data, chunk=128), cKDTree(data).query(queries)[1])
+
+    def test_repairs_a_region_mapped_to_itself(self, blob):
+        """The true map with a cap of the blob sent to itself (the failure it is for): the
+        realignment by geodesic distances to anchors restores the cap's mirror."""
+        from torchsym.mesh.geodesic import geodesic_distances
+        from torchsym.mesh.intrinsic import _anchor_realignment
+        from torchsym.mesh.operators import edge_graph
+
+        mesh, gt = blob
+        v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+        graph = edge_graph(v, f)
+        broken = gt.copy()
+        cap = v[:, 2] > 0.5 * v[:, 2].max()  # a cap across the mirror plane x = 0
+        broken[cap] = np.flatnonzero(cap)
+        rng = np.random.default_rng(0)
+        rows = np.sort(rng.choice(v.shape[0], 400, replace=False))
+        anchors = rng.choice(rows, 48, replace=False)
+        calls = []
+
+        def distances(sources):
+            calls.append(len(sources))
+            return geodesic_distances(graph, sources)
+
+        image = _anchor_realignment(distances, rows, broken, anchors, iters=3)
+        tol = 0.1 * np.ptp(v, axis=0).max()
+        wrong_before = np.linalg.norm(v[broken[rows]] - v[gt[rows]], axis=1) > tol
+        wrong_after = np.linalg.norm(v[image] - v[gt[rows]], axis=1) > tol
+        assert wrong_before[cap[rows]].mean() > 0.5  # the cap was broken
+        assert wrong_after.mean() < 0.05
+        assert sum(calls) < 48 * 4  # distances from a repeated source are read once
+
+    def test_exact_symmetry_is_left_alone(self, solved):
+        result, mesh, gt = solved
+        assert "realign" in result.timings
+        assert not any(n.startswith("realigned") for n in result.notes)  # it reverses it everywhere already
+        assert correspondence_rate(mesh, result.map, ground_truth=gt).rate == 1.0
+
+    def test_kept_when_forced_and_still_exact(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)  # run whatever the share
+        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)  # and keep any map
+        out = intrinsic_symmetry(mesh)
+        assert any(n.startswith("realigned by geodesic distances to 64 anchors") for n in out.notes)
+        assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
+
+    def test_not_kept_without_a_clear_rise(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, _ = blob
+        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)
+        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", 2.0)  # no share can rise by 2
+        calls = []
+        original = intrinsic._anchor_realignment
+        monkeypatch.setattr(intrinsic, "_anchor_realignment", lambda *a, **k: calls.append(1) or original(*a, **k))
+        out = intrinsic_symmetry(mesh)
+        assert len(calls) == 2  # geodesic and biharmonic distances were both tried
+        assert not any(n.startswith("realigned") for n in out.notes)
+
+    @pytest.mark.parametrize("settings", [{"realign_anchors": 0}, {"realign_iters": 0}, {"refine_iters": 0}])
+    def test_off(self, blob, settings):
+        assert "realign" not in intrinsic_symmetry(blob[0], **settings).timings
+
+    def test_bad_settings_and_the_module(self, blob, monkeypatch):
+        with pytest.raises(InputValueError, match="realign_anchors"):
+            intrinsic_symmetry(blob[0], realign_anchors=-1)
+        with pytest.raises(InputValueError, match="realign_iters"):
+            IntrinsicSymmetry(realign_iters=1.5)
+        seen = _record_settings(monkeypatch)
+        IntrinsicSymmetry(realign_anchors=32, realign_iters=2)(blob[0])
+        assert seen["realign_anchors"] == 32 and seen["realign_iters"] == 2
