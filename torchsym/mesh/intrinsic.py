@@ -859,12 +859,16 @@ def intrinsic_symmetry(
             realign" runs ``realign_anchors = 0`` side by side) the correspondence rate
             rose from 97.7 to 98.2 % on TOSCA (cat10 0.85 -> 0.98, cat4 0.88 -> 0.98,
             cat5 0.94 -> 0.99 by geodesic distances, dog10 0.88 -> 0.99 by biharmonic
-            ones; cat3 0.95 -> 0.92) and stayed at 99.1 % on FAUST. Realigned maps that
-            spoiled a map (cat6 0.99 -> 0.92, victoria2 0.91 -> 0.84) reversed the
-            orientation at no more than 1 point more, hence the 2-point margin. Costs 0.5-1
-            s at 5,000 vertices where it runs (four Dijkstra runs from 64 sources, two
-            nearest-vertex searches of every vertex in the final basis); an exact mirror
-            symmetry reverses the orientation everywhere and skips it.
+            ones; cat3 0.95 -> 0.92), from 99.1 to 99.2 % on FAUST (``tr_reg_017`` 0.94 ->
+            0.98) and stayed at 92.1 % on the synthetic meshes; with holes from 92.6 to 93.6
+            % on TOSCA (mesh rate 94.7 -> 100 %), 77.1 to 77.6 % on the synthetic meshes, but
+            80.0 to 79.4 % on FAUST (``tr_reg_084`` 0.44 -> 0.35). In a scratch replay the
+            realignments that spoiled a map (cat6 0.99 -> 0.92, victoria2 0.91 -> 0.84)
+            reversed the orientation at no more than 1 point more, hence the 2-point margin.
+            Costs 0.5-1 s at 5,000 vertices where it runs (four Dijkstra runs from 64
+            sources, two nearest-vertex searches of every vertex in the final basis; the
+            median time per TOSCA shape rose from 1.5 to 2.2 s); an exact mirror symmetry
+            reverses the orientation everywhere and skips it.
         realign_iters: rounds of the realignment of step 14 (0 skips the step).
         mu: weight of the pairing term of Eq. 6.4. The eigenvalue terms use the
             eigenvalues of the unit-area mesh divided by ``lambda_k``, so that the cost
