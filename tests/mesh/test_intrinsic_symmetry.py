@@ -768,6 +768,10 @@ class TestRealign:
         data = rng.standard_normal((700, 64))
         queries = data[rng.choice(700, 300)] + 0.05 * rng.standard_normal((300, 64))
         np.testing.assert_array_equal(_nearest_profiles(queries, data, chunk=128), cKDTree(data).query(queries)[1])
+        # distance profiles: non-negative, with a common offset of the order of their spread
+        profiles = np.abs(rng.standard_normal((700, 64))) + 1.0
+        near = profiles[rng.choice(700, 300)] + 0.05 * rng.standard_normal((300, 64))
+        np.testing.assert_array_equal(_nearest_profiles(near, profiles), cKDTree(profiles).query(near)[1])
 
     def test_repairs_a_region_mapped_to_itself(self, blob):
         """The true map with a cap of the blob sent to itself (the failure it is for): the
@@ -785,10 +789,10 @@ class TestRealign:
         rng = np.random.default_rng(0)
         rows = np.sort(rng.choice(v.shape[0], 400, replace=False))
         anchors = rng.choice(rows, 48, replace=False)
-        calls = []
+        calls: list[int] = []
 
         def distances(sources):
-            calls.append(len(sources))
+            calls.extend(int(s) for s in sources)
             return geodesic_distances(graph, sources)
 
         image = _anchor_realignment(distances, rows, broken, anchors, iters=3)
@@ -797,7 +801,9 @@ class TestRealign:
         wrong_after = np.linalg.norm(v[image] - v[gt[rows]], axis=1) > tol
         assert wrong_before[cap[rows]].mean() > 0.5  # the cap was broken
         assert wrong_after.mean() < 0.05
-        assert sum(calls) < 48 * 4  # distances from a repeated source are read once
+        assert len(calls) == len(set(calls))  # distances from a repeated source are read once
+        with pytest.raises(InputValueError, match="anchors"):
+            _anchor_realignment(distances, rows, broken, np.array([rows.max() + 1]), iters=1)
 
     def test_exact_symmetry_is_left_alone(self, solved):
         result, mesh, gt = solved
@@ -812,7 +818,7 @@ class TestRealign:
         monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)  # run whatever the share
         monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)  # and keep any map
         out = intrinsic_symmetry(mesh)
-        assert any(n.startswith("realigned by geodesic distances to 64 anchors") for n in out.notes)
+        assert any(n.startswith("realigned by ") and "distances to 64 anchors" in n for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
     def test_not_kept_without_a_clear_rise(self, blob, monkeypatch):
@@ -831,6 +837,26 @@ class TestRealign:
     @pytest.mark.parametrize("settings", [{"realign_anchors": 0}, {"realign_iters": 0}, {"refine_iters": 0}])
     def test_off(self, blob, settings):
         assert "realign" not in intrinsic_symmetry(blob[0], **settings).timings
+
+    def test_runs_without_polish_in_refine_k(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)
+        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)
+        out = intrinsic_symmetry(mesh, polish_iters=0)
+        assert "realign" in out.timings and "polish" not in out.timings
+        assert any(n.startswith("realigned by ") for n in out.notes)
+        assert out.refined_functional_map.shape == (25, 25)  # the realigned map's C in refine_k
+        assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
+
+    def test_skipped_with_a_note_without_a_winding(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        monkeypatch.setattr(intrinsic, "consistently_wound", lambda faces: False)
+        out = intrinsic_symmetry(blob[0])
+        assert "realign" not in out.timings
+        assert any(n.startswith("realignment (step 14) skipped") for n in out.notes)
 
     def test_bad_settings_and_the_module(self, blob, monkeypatch):
         with pytest.raises(InputValueError, match="realign_anchors"):

@@ -441,7 +441,10 @@ def _nearest_profiles(queries: np.ndarray, profiles: np.ndarray, chunk: int = 51
     """For each row of ``queries (Q, A)`` the index of the nearest row of ``profiles (V, A)``.
 
     Brute force by ``|p|^2 - 2 q.p`` in float32 blocks: with ``A`` about 64 a kd-tree
-    visits most of its leaves, and the products are several times faster.
+    visits most of its leaves, and the products are several times faster. The rounding
+    can pick a near tie instead of the nearest row when the rows share a large common
+    offset against their spread; the callers' profiles (distances on a unit-area mesh,
+    eigenfunction embeddings) are of order 1.
     """
     prof = profiles.astype(np.float32)  # (V, A)
     norms = np.einsum("ij,ij->i", prof, prof)  # (V,)
@@ -466,6 +469,11 @@ def _anchor_realignment(
     the new map. ``distances(sources)`` gives ``(len(sources), V)``; rows for repeated
     sources are cached, since the images settle after the first round.
 
+    ``rows`` must be sorted and hold every anchor (the anchors are found in it by
+    :func:`numpy.searchsorted`). The profiles are compared in float32
+    (:func:`_nearest_profiles`): distances on the unit-area mesh are of order 1, where the
+    rounding only decides between near ties.
+
     Returns:
         ``(S,)`` the new image of every vertex of ``rows``.
     """
@@ -478,8 +486,10 @@ def _anchor_realignment(
                 cache[int(s)] = row
         return np.stack([cache[int(s)] for s in sources])  # (A, V)
 
-    base = profile(anchors)[:, rows].T  # (S, A) the sampled vertices' distances to the anchors
     where = np.searchsorted(rows, anchors)  # anchors are sampled vertices
+    if not (np.all(rows[:-1] < rows[1:]) and np.array_equal(rows[np.minimum(where, rows.size - 1)], anchors)):
+        raise InputValueError("rows, anchors: expected sorted distinct rows that hold every anchor")
+    base = profile(anchors)[:, rows].T  # (S, A) the sampled vertices' distances to the anchors
     image = vertex_map[rows].copy()  # (S,)
     for _ in range(iters):
         image = _nearest_profiles(base, profile(image[where]).T)
@@ -702,8 +712,10 @@ def intrinsic_symmetry(
         2010) in the final basis. Each result is refined by two rounds of ZoomOut in that
         basis (involutive with ``refine_involution``), searching from the vertex sample. The one that reverses the orientation at the most sampled vertices
         replaces the map when that share is more than 2 points above the map's own and it
-        leaves under 60 % of them near themselves. Skipped as step 13 is, and when the
-        faces are not consistently wound.
+        leaves under 60 % of them near themselves. Skipped when step 9 returned the
+        thesis's map unrefined, and when the faces are not consistently wound (with a
+        note). The final basis is ``polish_k`` eigenfunctions when step 13's map was kept,
+        else ``refine_k``.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
@@ -850,7 +862,7 @@ def intrinsic_symmetry(
             eigenpairs and three ZoomOut rounds.
         polish_iters: rounds of step 13 (0 skips it).
         realign_anchors: anchors of step 14 (an extension; 0 skips it). ZoomOut fits a
-            functional map in 40 eigenfunctions, which barely vary across a small part
+            functional map in 40 eigenfunctions (``polish_k``), which barely vary across a small part
             joined to the body by a narrow neck: on TOSCA's cats the chosen maps sent the
             head onto itself or slid it (cat10 0.85, cat4 0.88, cat5 0.94), and no larger
             basis repaired it (ZoomOut to 100: cat10 0.87). Distances from anchors all over
@@ -1228,6 +1240,8 @@ def intrinsic_symmetry(
         else:
             notes.append(f"ZoomOut to polish_k = {polish_k} eigenfunctions not kept ({test}); the map in {refine_k} is returned")
         timings["polish"] = time.perf_counter() - tic
+    if realign and not wound and full.shape[0] and (chosen.refined is not None or rescued):
+        notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
     if realign and wound and full.shape[0] and (chosen.refined is not None or rescued):
         # step 14: realign by distances to anchors, then ZoomOut; kept only if it reverses
         # the orientation at clearly more of the sampled vertices
@@ -1249,7 +1263,7 @@ def intrinsic_symmetry(
             best_share, found = before + _REALIGN_GAIN, None
             for label, distances in (("geodesic", lambda src: geodesic_distances(graph, src)), ("biharmonic", biharmonic)):
                 image = _anchor_realignment(distances, rows, vmap, anchors, realign_iters)
-                for _ in range(2):  # ZoomOut in kk as in step 13, brute-force searches from the sample
+                for _ in range(2):  # ZoomOut in kk as step 13's, but preimages only among the sample
                     fitted = _zoomout_fit(phi_top, area, rows, image, None)
                     if refine_involution:
                         pre = rows[_nearest_profiles(phi_top[rows], phi_top[rows] @ fitted)]  # preimages among the sample
@@ -1441,5 +1455,7 @@ class IntrinsicSymmetry(nn.Module):
             f"n_eigen={self.n_eigen}, n_times={self.n_times}, max_pairs={self.max_pairs}, "
             f"correct={self.correct}, mu={self.mu}, sign_hypotheses={self.sign_hypotheses}, "
             f"orientation_hypothesis={self.orientation_hypothesis}, "
-            f"refine_iters={self.refine_iters}, refine_k={self.refine_k}, polish_k={self.polish_k}, fill_holes={self.fill_holes}, seed={self.seed}"
+            f"refine_iters={self.refine_iters}, refine_k={self.refine_k}, polish_k={self.polish_k}, "
+            f"polish_iters={self.polish_iters}, realign_anchors={self.realign_anchors}, fill_holes={self.fill_holes}, "
+            f"seed={self.seed}"
         )
