@@ -572,10 +572,10 @@ class TestOrientationCheck:
 
         original = intrinsic._sampled_zoomout
 
-        def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None):
+        def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             # an isometric involution that keeps the orientation
             if oriented is not None and not oriented_too:
-                return original(big, area, rows, image, ks, trees, involution, oriented)
+                return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             k = int(ks[-1])
             turn = maps["turn"][rows]
             return turn, _fit_functional(big[rows, :k], big[turn, :k], area[rows])
@@ -613,10 +613,10 @@ class TestOrientationCheck:
         mesh, gt = blob
         original = intrinsic._sampled_zoomout
 
-        def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None):
+        def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             # step 9's refinement drifts to the identity on every hypothesis, so none passes
             if oriented is not None:
-                return original(big, area, rows, image, ks, trees, involution, oriented)
+                return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             return rows.copy(), np.eye(int(ks[-1]))
 
         monkeypatch.setattr(intrinsic, "_sampled_zoomout", plain_drifts_home)
@@ -704,9 +704,9 @@ class TestPolish:
         mesh, _ = blob
         original = intrinsic._sampled_zoomout
 
-        def polish_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None):
+        def polish_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             if int(ks[0]) <= 25:  # steps 9 and 12
-                return original(big, area, rows, image, ks, trees, involution, oriented)
+                return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             return rows.copy(), np.eye(int(ks[-1]))
 
         monkeypatch.setattr(intrinsic, "_sampled_zoomout", polish_drifts_home)

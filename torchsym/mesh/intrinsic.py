@@ -292,7 +292,7 @@ def _zoomout_fit(phi: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.
 
 def _sampled_zoomout(
     big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: dict,
-    involution: bool = True, oriented: dict | None = None,
+    involution: bool = True, oriented: dict | None = None, brute: bool = False,
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """ZoomOut (Melzi et al. 2019) on the vertex sample ``rows``: returns the sample's image and the last ``C``.
 
@@ -313,6 +313,10 @@ def _sampled_zoomout(
     functional map of an intrinsic reflection anticommutes with the orientation operator
     ``O_p`` of every descriptor it preserves (Ren et al. 2018), while the maps plain
     ZoomOut settles on may keep the orientation over whole regions.
+
+    With ``brute`` (step 14's rounds, far from a settled map, where the kd-trees in ``kk``
+    dimensions visit most of their leaves) the searches are :func:`_nearest_profiles`,
+    ``trees`` is not used, and each preimage is sought among the sample only.
     """
     fitted = None
     for kk in ks:
@@ -322,9 +326,15 @@ def _sampled_zoomout(
         if involution:
             # the inverse map too: each sample's preimage is the vertex whose row of Phi C
             # is nearest its row of Phi; for an involution T^-1 = T, so both fit the same C
-            pre = cKDTree(phi @ fitted).query(phi[rows], k=1)[1]
+            if brute:
+                pre = rows[_nearest_profiles(phi[rows], phi[rows] @ fitted)]
+            else:
+                pre = cKDTree(phi @ fitted).query(phi[rows], k=1)[1]
             fitted = nearest_involution(0.5 * (fitted + _zoomout_fit(phi, area, rows, pre, factor)))
-        image = trees[int(kk)].query(phi[rows] @ fitted, k=1)[1].astype(np.int64)
+        if brute:
+            image = _nearest_profiles(phi[rows] @ fitted, phi)
+        else:
+            image = trees[int(kk)].query(phi[rows] @ fitted, k=1)[1].astype(np.int64)
     return image, fitted
 
 
@@ -381,8 +391,8 @@ _ORIENTATION_MAX_K = 50
 # 0.08-0.10, the ones that gained rose or fell by under 0.04.
 _POLISH_ORIENTATION_DROP = 0.05
 # Step 14 keeps a realigned map only if it reverses the orientation at more than this many
-# points more of the sampled vertices (TOSCA: the cats whose heads it repaired rose by 5-15
-# points; the maps it spoiled, victoria2 and dog10, by at most 1).
+# points more of the sampled vertices (a scratch replay on TOSCA: the cats whose heads it
+# repaired rose by 5-15 points; the maps it spoiled, cat6 and victoria2, by at most 1).
 _REALIGN_GAIN = 0.02
 # and runs only on maps that reverse it at fewer of them than this: the maps it repaired on
 # TOSCA reversed it at 67-78 %; an exact mirror symmetry reverses it at 100 %.
@@ -444,7 +454,9 @@ def _nearest_profiles(queries: np.ndarray, profiles: np.ndarray, chunk: int = 51
     visits most of its leaves, and the products are several times faster. The rounding
     can pick a near tie instead of the nearest row when the rows share a large common
     offset against their spread; the callers' profiles (distances on a unit-area mesh,
-    eigenfunction embeddings) are of order 1.
+    eigenfunction embeddings) are of order 1. :class:`~torchsym.matching.KNNIndex` with
+    ``method="brute"`` is exact (float64, re-ranked) but 2-3x slower on these blocks, and
+    step 14 makes 14 such searches per mesh.
     """
     prof = profiles.astype(np.float32)  # (V, A)
     norms = np.einsum("ij,ij->i", prof, prof)  # (V,)
@@ -1237,6 +1249,7 @@ def intrinsic_symmetry(
             keep, test = after <= before, f"geodesic distortion {before:.3f} -> {after:.3f}"
         if keep and probe.near_self(image) < _NEAR_SELF_LIMIT:
             vmap, full = trial, fitted
+            vmap_share = after if wound else None  # the kept map's share, for step 14
         else:
             notes.append(f"ZoomOut to polish_k = {polish_k} eigenfunctions not kept ({test}); the map in {refine_k} is returned")
         timings["polish"] = time.perf_counter() - tic
@@ -1246,7 +1259,7 @@ def intrinsic_symmetry(
         # step 14: realign by distances to anchors, then ZoomOut; kept only if it reverses
         # the orientation at clearly more of the sampled vertices
         tic = time.perf_counter()
-        before = reversed_share(vmap)
+        before = reversed_share(vmap) if vmap_share is None else vmap_share  # steps 12 / 13 measured it
         if before < _REALIGN_BELOW:
             kk = int(full.shape[0])
             phi_top = big[:, :kk]  # (V', kk)
@@ -1262,13 +1275,8 @@ def intrinsic_symmetry(
             anchors = rng.choice(rows, size=min(realign_anchors, rows.size), replace=False)  # (A,)
             best_share, found = before + _REALIGN_GAIN, None
             for label, distances in (("geodesic", lambda src: geodesic_distances(graph, src)), ("biharmonic", biharmonic)):
-                image = _anchor_realignment(distances, rows, vmap, anchors, realign_iters)
-                for _ in range(2):  # ZoomOut in kk as step 13's, but preimages only among the sample
-                    fitted = _zoomout_fit(phi_top, area, rows, image, None)
-                    if refine_involution:
-                        pre = rows[_nearest_profiles(phi_top[rows], phi_top[rows] @ fitted)]  # preimages among the sample
-                        fitted = nearest_involution(0.5 * (fitted + _zoomout_fit(phi_top, area, rows, pre, None)))
-                    image = _nearest_profiles(phi_top[rows] @ fitted, phi_top)
+                start = _anchor_realignment(distances, rows, vmap, anchors, realign_iters)
+                image, fitted = _sampled_zoomout(big, area, rows, start, np.array([kk, kk]), trees, refine_involution, brute=True)
                 if probe.near_self(image) >= _NEAR_SELF_LIMIT:
                     continue
                 trial = trees[kk].query(phi_top @ fitted, k=1, workers=-1)[1].astype(np.int64)
