@@ -607,19 +607,23 @@ class TestOrientationCheck:
         with pytest.raises(InputValueError, match="refine_orientation"):
             intrinsic_symmetry(blob[0], refine_orientation=-1.0)
 
-    def test_rescues_when_no_hypothesis_passes(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
-
-        mesh, gt = blob
+    @staticmethod
+    def _drifting_refiner(intrinsic):
+        """A stand-in for ZoomOut whose plain refinement drifts to the identity on every hypothesis, so none passes step 9."""
         original = intrinsic._sampled_zoomout
 
         def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
-            # step 9's refinement drifts to the identity on every hypothesis, so none passes
             if oriented is not None:
                 return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             return rows.copy(), np.eye(int(ks[-1]))
 
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", plain_drifts_home)
+        return plain_drifts_home
+
+    def test_rescues_when_no_hypothesis_passes(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._drifting_refiner(intrinsic))
         off = intrinsic_symmetry(mesh, refine_orientation=0.0)
         assert any("returned unrefined and is unreliable" in n for n in off.notes)
         out = intrinsic_symmetry(mesh)
@@ -627,6 +631,20 @@ class TestOrientationCheck:
         assert any(n.startswith("no hypothesis passed the tests of an isometric involution; refined") for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=torch.from_numpy(gt)).rate > 0.95
         assert out.refined_functional_map.shape == (25, 25)
+
+    def test_rescue_allows_more_distortion(self, blob, monkeypatch):
+        """With no passing hypothesis the rescue takes maps up to 1.5x the distortion limit, and says so."""
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._drifting_refiner(intrinsic))
+        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", lambda self, image: 0.15)
+        out = intrinsic_symmetry(mesh, max_distortion=0.12)  # 0.15 < 1.5 x 0.12
+        assert any("distorts geodesics by 0.150, above the limit 0.12: the map is less reliable" in n for n in out.notes)
+        assert correspondence_rate(mesh, out.map, ground_truth=torch.from_numpy(gt)).rate > 0.95
+        tight = intrinsic_symmetry(mesh, max_distortion=0.09)  # 0.15 > 1.5 x 0.09
+        assert any("returned unrefined and is unreliable" in n for n in tight.notes)
+        assert not any("refined with the orientation penalty" in n for n in tight.notes)
 
     def test_no_reoriented_map_found_keeps_the_map(self, monkeypatch):
         from torchsym.mesh import intrinsic
