@@ -253,8 +253,10 @@ def _kdtree(points: np.ndarray) -> cKDTree:
     (approximate ones, ``eps > 0``, do not: :func:`_sign_hypotheses` keeps scipy's default). The queries of
     maps that are still inexact (a hypothesis before ZoomOut, early rounds) lie far from
     the points and visit most leaves, where larger leaves cost less: on the benchmark's
-    twisted 12,900-vertex mannequin-devil the solver took 2.25 s against 2.68 s with the
-    default 16, the same maps, and TOSCA's shapes 2 % less; in 40 dimensions 64 was slower.
+    twisted 12,900-vertex mannequin-devil the solver took 2.33 s against 2.65 s with the
+    default 16 (``bench_mesh.py`` timing rows), with the same maps on all 244 benchmark
+    meshes, and the 5,000-vertex FAUST / TOSCA shapes about 1 % less; in 40 dimensions 64
+    was slower than 16 there.
     """
     return cKDTree(points, leafsize=64 if points.shape[1] < 30 else 16)
 
@@ -813,7 +815,7 @@ def intrinsic_symmetry(
             93.6 to 94.3 % (dog10: the orientation map, 0.118, replaced the thesis's pairs,
             0.148: rate 0.56 -> 0.82) and left the other half of TOSCA, both halves of
             FAUST and the synthetic meshes unchanged (dropping the limit cost 1.2 points on
-            TOSCA's other half) Step 12's search on a mesh where no
+            TOSCA's other half). Step 12's search on a mesh where no
             hypothesis passed allows 1.5 times this (``max_distortion_open`` likewise).
         max_distortion_open: the same limit for meshes with boundary edges (holes,
             cut-off parts). A boundary is in general asymmetric and bends the geodesics
