@@ -144,6 +144,7 @@ class TestIntrinsicSymmetry:
         from torchsym.mesh.intrinsic import (
             _fit_functional,
             _sampled_zoomout,
+            _Searches,
             nearest_involution,
         )
         from torchsym.mesh.operators import mass_matrix
@@ -157,7 +158,7 @@ class TestIntrinsicSymmetry:
         image = gt[rows].copy()
         bad = rng.random(rows.size) < 0.4
         image[bad] = rng.integers(0, v.shape[0], int(bad.sum()))  # 40 % of the map wrong
-        trees = {13: cKDTree(phi)}
+        trees = _Searches(phi, None)
         out, c = _sampled_zoomout(phi, area, rows, image, np.array([13]), trees, involution=True)
         fwd = _fit_functional(phi[rows], phi[image], area[rows])
         pre = cKDTree(phi @ fwd).query(phi[rows], k=1)[1]
@@ -166,7 +167,11 @@ class TestIntrinsicSymmetry:
         truth = _fit_functional(phi[rows], phi[gt[rows]], area[rows])
         forward_only = nearest_involution(fwd)
         assert np.linalg.norm(c - truth) < np.linalg.norm(forward_only - truth)
-        assert (out == gt[rows]).mean() >= (trees[13].query(phi[rows] @ forward_only, k=1)[1] == gt[rows]).mean()
+        assert (out == gt[rows]).mean() >= (cKDTree(phi).query(phi[rows] @ forward_only, k=1)[1] == gt[rows]).mean()
+        # among an even subset that holds the sample: the images are subset vertices
+        subset = np.union1d(rows, np.arange(0, v.shape[0], 3))
+        sub_out, _ = _sampled_zoomout(phi, area, rows, image, np.array([13]), _Searches(phi, subset), involution=True)
+        assert np.isin(sub_out, subset).all() and (sub_out == gt[rows]).mean() >= 0.5 * (out == gt[rows]).mean()
 
     def test_nearest_involution(self):
         from scipy.stats import ortho_group
@@ -257,6 +262,75 @@ class TestIntrinsicSymmetryModule:
         assert np.array_equal(np.load(paths[1]), result.map.numpy())
         assert paths[0].read_bytes().startswith(b"ply")
         assert '"map"' in result.to_json()
+
+
+
+class TestVertexSubsample:
+    """``search_vertices``: the searches on the vertex sample look among an even subset."""
+
+    def test_even_subset(self):
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh.intrinsic import _even_subset
+        from torchsym.mesh.synthetic import icosphere
+
+        v = icosphere(4).vertices.double().numpy()  # (2562, 3)
+        v = v / np.sqrt(4 * np.pi)  # about unit area
+        rng = np.random.default_rng(0)
+        rows = np.sort(rng.choice(v.shape[0], size=100, replace=False))
+        sub = _even_subset(v, rows, 500, np.random.default_rng(1))
+        assert np.all(np.diff(sub) > 0) and np.isin(rows, sub).all() and 400 < sub.size <= 500
+        # every vertex nearer a kept one than with a uniformly random subset of the same size
+        gap = cKDTree(v[sub]).query(v)[0].max()
+        random_gaps = [
+            cKDTree(v[np.random.default_rng(s).choice(v.shape[0], size=sub.size, replace=False)]).query(v)[0].max()
+            for s in range(5)
+        ]
+        assert gap < min(random_gaps)
+        # the same generator state, the same subset; rows beyond m are all kept
+        assert np.array_equal(sub, _even_subset(v, rows, 500, np.random.default_rng(1)))
+        assert np.array_equal(_even_subset(v, rows, 50, np.random.default_rng(1)), rows)
+
+    def test_recovers_the_symmetry_searching_a_subset(self, blob, monkeypatch):
+        from torchsym.mesh import intrinsic
+
+        mesh, gt = blob
+        sizes = []
+        original = intrinsic._Searches.__init__
+
+        def spy(self, big, targets):
+            sizes.append(None if targets is None else targets.size)
+            original(self, big, targets)
+
+        monkeypatch.setattr(intrinsic._Searches, "__init__", spy)
+        out = intrinsic_symmetry(mesh, select_samples=160, search_vertices=300)
+        whole = intrinsic_symmetry(mesh, select_samples=160)
+        assert sizes[0] is not None and 160 <= sizes[0] <= 300 and sizes[1] is None  # 642 vertices
+        assert (out.map.numpy() == gt).mean() > 0.99 and (whole.map.numpy() == gt).mean() > 0.99
+
+    def test_map_before_refine_is_a_near_nearest_map(self, solved):
+        # when ZoomOut's map replaces it, the thesis's dense map comes from an approximate
+        # search: each image at most 1.5 times as far as the nearest row of the embedding
+        from scipy.spatial import cKDTree
+
+        result, mesh, _ = solved
+        assert result.hypothesis == "pairs"
+        v = mesh.vertices.double().numpy()
+        _, phi = laplacian_eigen(v, mesh.faces.numpy(), 40)
+        signs = np.diag(result.functional_map.numpy())
+        emb = (phi[:, :13] @ result.rotation.numpy())[:, signs != 0]
+        target, query = emb * signs[signs != 0], emb
+        nearest, exact = cKDTree(target).query(query)
+        image = result.map_before_refine.numpy()
+        got = np.linalg.norm(query - target[image], axis=1)
+        assert np.all(got <= 1.5 * nearest + 1e-12) and (image == exact).mean() > 0.9
+
+    def test_bad_setting(self, blob):
+        mesh, _ = blob
+        with pytest.raises(InputValueError, match="search_vertices: expected an integer >= 50, got 10"):
+            intrinsic_symmetry(mesh, search_vertices=10)
+        with pytest.raises(InputValueError, match="search_vertices: expected an integer >= 50, got 10"):
+            IntrinsicSymmetry(search_vertices=10)
 
 
 def test_real_mesh(shared_data):
@@ -530,13 +604,11 @@ class TestOrientationCheck:
             assert abs(up - down) < 1e-6 * (up + down - 2 * base)
 
     def test_penalty_keeps_the_mirror_and_dislodges_the_identity(self, spectral25):
-        from scipy.spatial import cKDTree
-
-        from torchsym.mesh.intrinsic import _oriented_fits, _sampled_zoomout
+        from torchsym.mesh.intrinsic import _oriented_fits, _sampled_zoomout, _Searches
 
         big, area, ops, rows, gt = spectral25
         ks = np.array([16, 19, 22, 25])
-        trees = {int(k): cKDTree(big[:, :k]) for k in ks}
+        trees = _Searches(big, None)
         oriented = _oriented_fits(big, area, rows, ks, ops, (30.0,))[0]
         mirror, _ = _sampled_zoomout(big, area, rows, gt[rows], ks, trees, True, oriented)
         assert np.mean(mirror == gt[rows]) > 0.99

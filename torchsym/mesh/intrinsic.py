@@ -114,7 +114,13 @@ class IntrinsicSymmetryResult(Result):
             the correction is off).
         map_before_refine: ``(V,)`` int64, the dense map (Sec. 6.2.7) from ``C`` and
             ``R`` of the chosen hypothesis, before the ZoomOut rounds (equal to ``map`` when
-            ``refine_iters == 0``); input order, ``-1`` for dropped vertices.
+            ``refine_iters == 0``); input order, ``-1`` for dropped vertices. Where the
+            ZoomOut rounds' map replaced it, it is only reported, and it comes from an
+            approximate nearest-neighbour search: each image at most 1.5 times as far in
+            the embedding as the nearest row (``cKDTree.query(eps=0.5)``). On the
+            benchmark's twisted 12,900-vertex mannequin-devil that search returned the
+            nearest row for 92 % of the vertices in 0.09 s against 0.30 s; the exact map
+            is the result of ``refine_iters = 0``.
         refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
             round in the first ``k_r`` Laplace-Beltrami eigenfunctions ``Phi`` (``polish_k``
             when step 13's polished map was kept, else ``refine_k``)
@@ -261,6 +267,84 @@ def _kdtree(points: np.ndarray) -> cKDTree:
     return cKDTree(points, leafsize=64 if points.shape[1] < 30 else 16)
 
 
+def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Generator) -> np.ndarray:
+    """Sorted vertex indices, at most ``m`` (and all of ``rows``): ``rows`` and vertices spread evenly over the surface.
+
+    ``rows`` and one vertex (a random one) from each occupied cell of a cubic grid over
+    ``points (V, 3)`` (a unit-area mesh), the cell side found by bisection so that the
+    union holds at most ``m`` vertices (more only when ``rows`` alone does). An even spread keeps every vertex near a kept one; a uniformly random subset
+    of the same size leaves gaps, and on the benchmark's twisted 12,900-vertex
+    mannequin-devil it raised the functional defect of step 9 from 0.42 (every vertex) to
+    0.48 at 6,000 vertices and 0.50 at 4,000 (where step 10's limit, 0.5, made the solver
+    try the extrinsic plane), against 0.41-0.44 for this subset at 3,000-6,000.
+    """
+    rows = np.unique(rows)
+    if rows.size >= m:
+        return rows
+    order = rng.permutation(points.shape[0])
+    q = points[order] - points.min(axis=0)
+    span = float(q.max())
+
+    def subset(h: float) -> np.ndarray:
+        cells = np.floor(q / h).astype(np.int64)  # (V, 3), each below 2^20
+        keys = (cells[:, 0] << 40) | (cells[:, 1] << 20) | cells[:, 2]
+        return np.union1d(rows, order[np.unique(keys, return_index=True)[1]])
+
+    # a surface of area a holds about a / h^2 cells of side h; the mesh has unit area
+    lo, hi = max(0.25 / math.sqrt(m), span / 2.0**19), max(4.0 / math.sqrt(m), span / 2.0**19)
+    for _ in range(8):
+        mid = math.sqrt(lo * hi)
+        if subset(mid).size > m:
+            lo = mid
+        else:
+            hi = mid
+    out = subset(hi)
+    return out if out.size <= m else rows
+
+
+class _Searches:
+    """Nearest rows of the eigenfunction embedding ``big[:, :kk]``, with kd-trees built once per ``kk``.
+
+    :meth:`dense` is the tree over every vertex, for the maps of every vertex. :meth:`nearest`
+    answers the sampled rounds (ZoomOut on the vertex sample, steps 9-14) among ``targets``
+    only (sorted vertex indices holding the sample, :func:`_even_subset`; None: every
+    vertex), as ZoomOut on a vertex subsample does (pyFM's ``subsample``): the sampled
+    rounds' queries, far from the points while the map is inexact, then search a tree a
+    fraction of the size, and only the maps of every vertex search them all.
+    """
+
+    def __init__(self, big: np.ndarray, targets: np.ndarray | None):
+        self.big, self.targets = big, targets
+        self._dense: dict[int, cKDTree] = {}
+        self._sample: dict[int, cKDTree] = {}
+
+    def dense(self, kk: int) -> cKDTree:
+        kk = int(kk)
+        if kk not in self._dense:
+            self._dense[kk] = _kdtree(self.big[:, :kk])
+        return self._dense[kk]
+
+    def sample_points(self, points: np.ndarray) -> np.ndarray:
+        """The rows of ``points (V, D)`` among which the sampled rounds search."""
+        return points if self.targets is None else points[self.targets]
+
+    def to_vertices(self, index: np.ndarray) -> np.ndarray:
+        """Vertex indices of positions in :meth:`sample_points`."""
+        index = np.asarray(index, dtype=np.int64)
+        return index if self.targets is None else self.targets[index]
+
+    def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
+        """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest."""
+        kk = int(kk)
+        if self.targets is None:
+            tree = self.dense(kk)
+        else:
+            if kk not in self._sample:
+                self._sample[kk] = _kdtree(self.big[self.targets, :kk])
+            tree = self._sample[kk]
+        return self.to_vertices(tree.query(queries, k=1)[1])
+
+
 def _fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Least-squares functional map ``C`` with ``Phi[rows] C ~ Phi[T(rows)]``, area-weighted.
 
@@ -306,7 +390,7 @@ def _zoomout_fit(phi: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.
 
 
 def _sampled_zoomout(
-    big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: dict,
+    big: np.ndarray, area: np.ndarray, rows: np.ndarray, image: np.ndarray, ks: np.ndarray, trees: _Searches,
     involution: bool = True, oriented: dict | None = None, brute: bool = False,
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """ZoomOut (Melzi et al. 2019) on the vertex sample ``rows``: returns the sample's image and the last ``C``.
@@ -344,12 +428,12 @@ def _sampled_zoomout(
             if brute:
                 pre = rows[_nearest_profiles(phi[rows], phi[rows] @ fitted)]
             else:
-                pre = _kdtree(phi @ fitted).query(phi[rows], k=1)[1]
+                pre = trees.to_vertices(_kdtree(trees.sample_points(phi) @ fitted).query(phi[rows], k=1)[1])
             fitted = nearest_involution(0.5 * (fitted + _zoomout_fit(phi, area, rows, pre, factor)))
         if brute:
-            image = _nearest_profiles(phi[rows] @ fitted, phi)
+            image = trees.to_vertices(_nearest_profiles(phi[rows] @ fitted, trees.sample_points(phi)))
         else:
-            image = trees[int(kk)].query(phi[rows] @ fitted, k=1)[1].astype(np.int64)
+            image = trees.nearest(kk, phi[rows] @ fitted)
     return image, fitted
 
 
@@ -407,6 +491,9 @@ _REORIENTED_NEAR_SELF = 0.5
 # 1.25x and 2x gave the same map, and cat6, the benchmark's other rescued mesh, kept its own).
 _RESCUE_DISTORTION = 1.5
 _ORIENTATION_MAX_K = 50
+# map_before_refine, when ZoomOut's map replaced it, by an approximate search: each image at
+# most 1 + this times as far as the nearest (see IntrinsicSymmetryResult.map_before_refine)
+_COARSE_EPS = 0.5
 # Step 13 keeps the map polished in polish_k eigenfunctions unless its share of sampled
 # vertices where the orientation is reversed falls by more than this: on FAUST the polished
 # maps that lost 2-4 points of correspondence rate (a hand or the arms swapped) fell by
@@ -585,6 +672,8 @@ def _sign_hypotheses(
     margin: float,
     rng: np.random.Generator,
     accept: float = 0.1,
+    points: np.ndarray | None = None,
+    max_points: int = 6000,
 ) -> tuple[np.ndarray, float, float]:
     """Try both signs of the ``n_flip`` least-confident eigenfunctions; keep the most consistent.
 
@@ -592,15 +681,22 @@ def _sign_hypotheses(
     signs and of the chosen ones. The thesis's signs are kept without a search when their
     consistency is already below ``accept`` (on FAUST and TOSCA, maps with a correspondence
     rate above 95 % score 0.03-0.06, failed ones 0.15-0.4), and replaced only by a sign
-    vector whose consistency is below ``margin`` times theirs.
+    vector whose consistency is below ``margin`` times theirs. With ``points`` (the unit-area
+    vertices) on more than ``max_points`` vertices, the images are sought among
+    ``max_points`` of them (:func:`_even_subset`, as ``search_vertices`` of
+    :func:`intrinsic_symmetry`).
     """
     use = np.nonzero(signs != 0)[0]
     use = use[use != 0]  # the constant eigenfunction is always even
     flip = use[np.argsort(np.abs(confidence[use]), kind="stable")[:n_flip]]
     cols = signs != 0
     sub_emb = emb[:, cols]
+    n = emb.shape[0]
+    rows = np.sort(rng.choice(n, size=min(n, 800), replace=False))
+    if points is not None and n > max_points:  # the images among an even subset that holds the rows
+        keep = _even_subset(points, rows, max_points, rng)
+        sub_emb, rows = sub_emb[keep], np.searchsorted(keep, rows)
     tree = cKDTree(sub_emb)  # default leaves: its searches are approximate (eps), so the leaf size would change them
-    rows = np.sort(rng.choice(emb.shape[0], size=min(emb.shape[0], 800), replace=False))
     base = map_consistency(tree, sub_emb, signs[cols], rows)
     if base < accept:
         return signs, base, base
@@ -639,6 +735,7 @@ def intrinsic_symmetry(
     extrinsic_min_score: float = 0.75,
     extrinsic_samples: int = 3000,
     select_samples: int = 1000,
+    search_vertices: int = 6000,
     max_distortion: float = 0.12,
     max_distortion_open: float = 0.12,
     correct: bool = True,
@@ -679,7 +776,8 @@ def intrinsic_symmetry(
        own ``C`` (:func:`map_consistency`, on 800 seeded vertices); one replaces the
        thesis's signs only when it is clearly (``< 0.6x``) more consistent. The search runs
        only when the thesis's map is itself inconsistent; it costs ``2^m`` approximate
-       nearest-neighbour queries of 800 points.
+       nearest-neighbour queries of 800 points (among ``search_vertices`` vertices on a
+       larger mesh).
     8. With ``orientation_hypothesis`` (an extension), a third map from the
        orientation-reversing functional map fitted to the dense HKS
        (:func:`~torchsym.mesh.orientation.orientation_reversing_map`, Ren et al. 2018).
@@ -805,6 +903,20 @@ def intrinsic_symmetry(
             least-squares fits stay determined.
             With 1,000, ZoomOut on the sample matched full ZoomOut to 0.1 point of
             correspondence rate on FAUST, TOSCA and the synthetic meshes.
+        search_vertices: on a mesh with more vertices than this, the searches on the vertex
+            sample (steps 7 and 9-14) look for images and preimages among this many vertices
+            only: the sample and vertices spread evenly over the surface
+            (:func:`_even_subset`), as ZoomOut on a vertex subsample does (pyFM's
+            ``subsample``); the maps of every vertex still search every vertex. Those
+            searches, of maps still far from exact, were most of the time on large meshes:
+            on the benchmark's twisted 12,900-vertex mannequin-devil
+            (``benchmarks/bench_mesh.py --timing-only``) the solver took 1.71 s against
+            2.33 s before, together with the approximate search of ``map_before_refine``
+            (the subset alone: about 1.9 s). In a replay of the benchmark's meshes the synthetic ones
+            above 6,000 vertices kept their rates (a holed man rose from 0.41 to 0.50);
+            FAUST and TOSCA (up to 5,004 vertices) are untouched. 3,000 was faster but
+            changed the choice of step 9 on 5,000-vertex shapes (FAUST ``tr_reg_047`` 0.99 ->
+            0.75, TOSCA cat10 0.98 -> 0.25, cat9 0.75 -> 0.69).
         max_distortion: largest sampled geodesic distortion (a mean relative error of
             distances) with which a hypothesis may replace the thesis's pairs. True
             symmetries score 0.02-0.05 on FAUST and about 0.1 on TOSCA's cats, whose
@@ -962,6 +1074,7 @@ def intrinsic_symmetry(
     refine_k = max(check_int(refine_k, "refine_k", minimum=1), n_eigen) if refine_iters else n_eigen
     sign_hypotheses = check_int(sign_hypotheses, "sign_hypotheses", minimum=0)
     select_samples = check_int(select_samples, "select_samples", minimum=50)
+    search_vertices = check_int(search_vertices, "search_vertices", minimum=50)
     max_distortion = check_positive(max_distortion, "max_distortion")
     max_distortion_open = check_positive(max_distortion_open, "max_distortion_open")
     refine_orientation = check_positive(refine_orientation, "refine_orientation", allow_zero=True)
@@ -1083,7 +1196,7 @@ def intrinsic_symmetry(
         emb = evecs @ rotation  # (V', k)
         if sign_hypotheses and pairs.shape[0]:
             rng = numpy_rng(gen)
-            signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng)
+            signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng, points=v, max_points=search_vertices)
             if q_chosen < q_thesis:
                 cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
         use = signs != 0
@@ -1112,14 +1225,17 @@ def intrinsic_symmetry(
         notes.append(f"select_samples raised from {select_samples} to {min(n, n_rows)}, 4 x {'polish_k' if polish else 'refine_k'}")
     rows = np.sort(rng.choice(n, size=min(n, n_rows), replace=False))  # (S,)
     ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
-    trees = {int(kk): _kdtree(big[:, :kk]) for kk in ks}
+    targets = None
+    if n > search_vertices:
+        targets = _even_subset(v, rows, search_vertices, rng)
+    trees = _Searches(big, targets)
     probe = GeodesicProbe(graph, rows, rng)
     seen: list[np.ndarray] = []
     width = 3 if refine_k > n_eigen else 2
 
     def score(cand: _Candidate) -> np.ndarray:
-        cand.tree = _kdtree(cand.target)
-        image = cand.tree.query(cand.query[rows], k=1)[1].astype(np.int64)  # (S,)
+        cand.tree = _kdtree(trees.sample_points(cand.target))
+        image = trees.to_vertices(cand.tree.query(cand.query[rows], k=1)[1])  # (S,)
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         cand.start = None if duplicate or not cand.usable else image
@@ -1184,7 +1300,11 @@ def intrinsic_symmetry(
         )
 
     tic = time.perf_counter()
-    vmap = chosen.tree.query(chosen.query, k=1, workers=-1)[1].astype(np.int64)  # (V',) the thesis's dense map
+    dense_tree = chosen.tree if targets is None and chosen.tree is not None else _kdtree(chosen.target)
+    # the thesis's dense map; when ZoomOut's map replaces it, it is only reported, and an
+    # approximate search (images at most 1 + _COARSE_EPS times too far) is enough
+    eps = _COARSE_EPS if refine_iters and chosen.refined is not None else 0.0
+    vmap = dense_tree.query(chosen.query, k=1, eps=eps, workers=-1)[1].astype(np.int64)  # (V',)
     timings["map"] += time.perf_counter() - tic
     coarse_map = vmap
     full = np.zeros((0, 0))
@@ -1193,7 +1313,7 @@ def intrinsic_symmetry(
     if refine_iters and chosen.refined is not None:
         tic = time.perf_counter()
         full = chosen.refined  # (k_r, k_r), fitted on the sample
-        vmap = trees[int(ks[-1])].query(big[:, : ks[-1]] @ full, k=1, workers=-1)[1].astype(np.int64)
+        vmap = trees.dense(ks[-1]).query(big[:, : ks[-1]] @ full, k=1, workers=-1)[1].astype(np.int64)
         timings["refine"] = time.perf_counter() - tic
     rescued = False
 
@@ -1219,7 +1339,7 @@ def intrinsic_symmetry(
         elif share < _KEEPS_ORIENTATION:  # the map keeps the orientation on most of the shape
             starts = [
                 (ks, chosen.start),  # the hypothesis's own map, the basis growing as in step 11
-                (np.full(refine_iters, ks[-1]), trees[int(ks[-1])].query(big[rows, : ks[-1]] @ full, k=1)[1]),
+                (np.full(refine_iters, ks[-1]), trees.nearest(ks[-1], big[rows, : ks[-1]] @ full)),
             ]
         else:
             starts = []
@@ -1238,7 +1358,7 @@ def intrinsic_symmetry(
                     distortion = probe.distortion(image) if probe.near_self(image) < _REORIENTED_NEAR_SELF else math.inf
                     if not distortion < bound:
                         continue
-                    trial = trees[int(ks[-1])].query(big[:, : ks[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
+                    trial = trees.dense(ks[-1]).query(big[:, : ks[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
                     trial_share = reversed_share(trial)
                     if trial_share >= best_share:
                         best_share, found, found_distortion = trial_share, (trial, fitted), distortion
@@ -1264,11 +1384,8 @@ def intrinsic_symmetry(
         # step 13: ZoomOut on into a larger basis, kept unless it lowers the orientation reversal
         tic = time.perf_counter()
         schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:]
-        for kk in schedule:
-            if int(kk) not in trees:  # (setdefault would build the tree even when it exists)
-                trees[int(kk)] = _kdtree(big[:, :kk])
         image, fitted = _sampled_zoomout(big, area, rows, vmap[rows], schedule, trees, refine_involution)
-        trial = trees[int(schedule[-1])].query(big[:, : schedule[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
+        trial = trees.dense(schedule[-1]).query(big[:, : schedule[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
         if wound:
             before = reversed_share(vmap) if vmap_share is None else vmap_share  # step 12's figure when it ran
             after = reversed_share(trial)
@@ -1299,8 +1416,6 @@ def intrinsic_symmetry(
                 sq = sq_norms[sources][:, None] + sq_norms[None, :] - 2.0 * psi[sources] @ psi.T  # (s, V')
                 return np.sqrt(np.maximum(sq, 0.0))
 
-            if kk not in trees:
-                trees[kk] = _kdtree(phi_top)
             anchors = rng.choice(rows, size=min(realign_anchors, rows.size), replace=False)  # (A,)
             best_share, found = before + _REALIGN_GAIN, None
             for label, distances in (("geodesic", lambda src: geodesic_distances(graph, src)), ("biharmonic", biharmonic)):
@@ -1308,7 +1423,7 @@ def intrinsic_symmetry(
                 image, fitted = _sampled_zoomout(big, area, rows, start, np.array([kk, kk]), trees, refine_involution, brute=True)
                 if probe.near_self(image) >= _NEAR_SELF_LIMIT:
                     continue
-                trial = trees[kk].query(phi_top @ fitted, k=1, workers=-1)[1].astype(np.int64)
+                trial = trees.dense(kk).query(phi_top @ fitted, k=1, workers=-1)[1].astype(np.int64)
                 trial_share = reversed_share(trial)
                 if trial_share > best_share:
                     best_share, found = trial_share, (label, trial, fitted)
@@ -1387,6 +1502,7 @@ class IntrinsicSymmetry(nn.Module):
         extrinsic_min_score: float = 0.75,
         extrinsic_samples: int = 3000,
         select_samples: int = 1000,
+        search_vertices: int = 6000,
         max_distortion: float = 0.12,
         max_distortion_open: float = 0.12,
         correct: bool = True,
@@ -1430,6 +1546,7 @@ class IntrinsicSymmetry(nn.Module):
         self.extrinsic_min_score = check_in_range(extrinsic_min_score, "extrinsic_min_score", 0.0, 1.0)
         self.extrinsic_samples = check_int(extrinsic_samples, "extrinsic_samples", minimum=10)
         self.select_samples = check_int(select_samples, "select_samples", minimum=50)
+        self.search_vertices = check_int(search_vertices, "search_vertices", minimum=50)
         self.max_distortion = check_positive(max_distortion, "max_distortion")
         self.max_distortion_open = check_positive(max_distortion_open, "max_distortion_open")
         self.min_confidence = check_positive(min_confidence, "min_confidence", allow_zero=True)
@@ -1469,6 +1586,7 @@ class IntrinsicSymmetry(nn.Module):
             extrinsic_min_score=self.extrinsic_min_score,
             extrinsic_samples=self.extrinsic_samples,
             select_samples=self.select_samples,
+            search_vertices=self.search_vertices,
             max_distortion=self.max_distortion,
             max_distortion_open=self.max_distortion_open,
             correct=self.correct,
