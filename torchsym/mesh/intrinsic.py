@@ -119,14 +119,15 @@ class IntrinsicSymmetryResult(Result):
             approximate nearest-neighbour search: each image at most 1.5 times as far in
             the embedding as the nearest row (``cKDTree.query(eps=0.5)``). On the
             benchmark's twisted 12,900-vertex mannequin-devil that search returned the
-            nearest row for 92 % of the vertices in 0.09 s against 0.30 s; the exact map
-            is the result of ``refine_iters = 0``.
+            nearest row for 89 % of the vertices, 1.0008 times as far on average, in
+            0.06 s against 0.30 s; the exact map is the result of ``refine_iters = 0``.
         refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
             round in the first ``k_r`` Laplace-Beltrami eigenfunctions ``Phi`` (``polish_k``
             when step 13's polished map was kept, else ``refine_k``)
             of the solved component, fitted on the selection's vertex sample: ``map`` is
-            the nearest row of ``Phi`` to each row of ``Phi C_r``. ``(0, 0)`` when
-            ``refine_iters == 0``.
+            the nearest row of ``Phi`` to each row of ``Phi C_r``, by an approximate search
+            (each image at most 1.5 times as far as the nearest row; see
+            ``_DENSE_EPS`` in the module). ``(0, 0)`` when ``refine_iters == 0``.
         eigenvalues: ``(k,)`` Laplace-Beltrami eigenvalues of the mesh scaled to unit area.
         pairs: ``(P, 2)`` int64 sparse pairs of symmetric feature points (input indices)
             of the chosen pairing (the thesis's pairing when the orientation hypothesis
@@ -252,7 +253,7 @@ class _Candidate:
     tree: cKDTree | None = None
 
 
-def _kdtree(points: np.ndarray) -> cKDTree:
+def _kdtree(points: np.ndarray, balanced: bool = True) -> cKDTree:
     """scipy's kd-tree of ``points (N, D)``, with leaves of 64 points below 30 dimensions (16 above).
 
     Exact searches return the same points whatever the leaf size; only their speed changes
@@ -262,9 +263,13 @@ def _kdtree(points: np.ndarray) -> cKDTree:
     twisted 12,900-vertex mannequin-devil the solver took 2.33 s against 2.65 s with the
     default 16 (``bench_mesh.py`` timing rows), with the same maps on all 244 benchmark
     meshes, and the 5,000-vertex FAUST / TOSCA shapes about 1 % less; in 40 dimensions 64
-    was slower than 16 there.
+    was slower than 16 there. Approximate searches (``eps > 0``: ``map_before_refine`` and
+    the maps of every vertex after ZoomOut) may return other points in another tree.
+    ``balanced=False`` splits cells at the middle of their longest side instead of at the
+    median (scipy's ``balanced_tree``); ``map_before_refine``'s search in 13 dimensions
+    then took 0.06 s against 0.10 s on that mesh.
     """
-    return cKDTree(points, leafsize=64 if points.shape[1] < 30 else 16)
+    return cKDTree(points, leafsize=64 if points.shape[1] < 30 else 16, balanced_tree=balanced)
 
 
 def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Generator) -> np.ndarray:
@@ -332,6 +337,15 @@ class _Searches:
         """Vertex indices of positions in :meth:`sample_points`."""
         index = np.asarray(index, dtype=np.int64)
         return index if self.targets is None else self.targets[index]
+
+    def map_every_vertex(self, fmap: np.ndarray) -> np.ndarray:
+        """The point map of ``fmap (kk, kk)``: each vertex to the vertex whose row of ``Phi`` is nearest its row of ``Phi C``.
+
+        Approximate (``eps = _DENSE_EPS``): each image at most ``1 + eps`` times as far as the nearest row.
+        """
+        kk = fmap.shape[0]
+        queries = self.big[:, :kk] @ fmap  # (V, kk)
+        return self.dense(kk).query(queries, k=1, eps=_DENSE_EPS, workers=-1)[1].astype(np.int64)
 
     def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
         """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest."""
@@ -494,6 +508,18 @@ _ORIENTATION_MAX_K = 50
 # map_before_refine, when ZoomOut's map replaced it, by an approximate search: each image at
 # most 1 + this times as far as the nearest (see IntrinsicSymmetryResult.map_before_refine)
 _COARSE_EPS = 0.5
+# The maps of every vertex after ZoomOut (steps 11-14) by an approximate search, each image
+# at most 1 + this times as far as the nearest row (cKDTree's eps). On the twisted
+# 12,900-vertex mannequin-devil such a search in 40 eigenfunctions returned the nearest row
+# for 98 % of the vertices, 1.0002 times as far on average, in 0.11 s against 0.26 s (0.06
+# against 0.11 s in 25), and the solver took about 1.5 s against 1.7 s. A replay of all 244
+# benchmark meshes kept every FAUST and TOSCA map; with holes, the man fell back from 0.50 to
+# 0.41 (its rate before search_vertices), FAUST tr_reg_076 rose 0.979 -> 0.995 and tr_reg_096
+# fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
+# cat10 (0.98 -> 0.25) and cat9 (0.75 -> 0.68), in the preimage searches alone cat9 (0.44);
+# unbalanced trees here (a further 0.03 s) cost dog10 0.99 -> 0.88. The sampled ZoomOut
+# rounds decide which map wins; these searches only read a settled map out.
+_DENSE_EPS = 0.5
 # Step 13 keeps the map polished in polish_k eigenfunctions unless its share of sampled
 # vertices where the orientation is reversed falls by more than this: on FAUST the polished
 # maps that lost 2-4 points of correspondence rate (a hand or the arms swapped) fell by
@@ -810,7 +836,10 @@ def intrinsic_symmetry(
         functional map of the current point map in a basis growing from ``k`` to
         ``refine_k`` eigenfunctions, averaged with that of its inverse map and made an
         orthogonal involution (``refine_involution``), and the point map it implies. The rounds run on the
-        selection's vertex sample and the last one maps every vertex.
+        selection's vertex sample and the last one maps every vertex (there, and in the
+        maps of every vertex of steps 12-14, by an approximate nearest-neighbour search:
+        each image at most 1.5 times as far in the embedding as the nearest row; the
+        sample's searches are exact).
     12. With ``refine_orientation > 0`` (an extension), an orientation test of the final map
         (:func:`~torchsym.mesh.orientation.orientation_reversal` on the vertex sample): a
         reflection reverses the surface's orientation, so a map that reverses it at fewer
@@ -945,7 +974,7 @@ def intrinsic_symmetry(
             on the vertex sample of step 9), in a basis of ``k_r``
             eigenfunctions, ``k_r`` rising evenly from ``n_eigen`` to ``refine_k``, and maps
             each sampled vertex to the nearest row of ``Phi`` to its row of ``Phi C``; the
-            last round's ``C`` maps every vertex. The thesis's
+            last round's ``C`` maps every vertex (step 11). The thesis's
             diagonal ``C`` in 13 eigenfunctions cannot follow shapes that are only nearly
             isometric (on FAUST the true ``C`` has mean ``|C_ii|`` 0.6-0.8); the free ``C``
             in a larger basis can. With the default 4 rounds to 25 eigenfunctions the
@@ -1300,7 +1329,7 @@ def intrinsic_symmetry(
         )
 
     tic = time.perf_counter()
-    dense_tree = chosen.tree if targets is None and chosen.tree is not None else _kdtree(chosen.target)
+    dense_tree = _kdtree(chosen.target, balanced=False)
     # the thesis's dense map; when ZoomOut's map replaces it, it is only reported, and an
     # approximate search (images at most 1 + _COARSE_EPS times too far) is enough
     eps = _COARSE_EPS if refine_iters and chosen.refined is not None else 0.0
@@ -1313,7 +1342,7 @@ def intrinsic_symmetry(
     if refine_iters and chosen.refined is not None:
         tic = time.perf_counter()
         full = chosen.refined  # (k_r, k_r), fitted on the sample
-        vmap = trees.dense(ks[-1]).query(big[:, : ks[-1]] @ full, k=1, workers=-1)[1].astype(np.int64)
+        vmap = trees.map_every_vertex(full)
         timings["refine"] = time.perf_counter() - tic
     rescued = False
 
@@ -1358,7 +1387,7 @@ def intrinsic_symmetry(
                     distortion = probe.distortion(image) if probe.near_self(image) < _REORIENTED_NEAR_SELF else math.inf
                     if not distortion < bound:
                         continue
-                    trial = trees.dense(ks[-1]).query(big[:, : ks[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
+                    trial = trees.map_every_vertex(fitted)
                     trial_share = reversed_share(trial)
                     if trial_share >= best_share:
                         best_share, found, found_distortion = trial_share, (trial, fitted), distortion
@@ -1385,7 +1414,7 @@ def intrinsic_symmetry(
         tic = time.perf_counter()
         schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:]
         image, fitted = _sampled_zoomout(big, area, rows, vmap[rows], schedule, trees, refine_involution)
-        trial = trees.dense(schedule[-1]).query(big[:, : schedule[-1]] @ fitted, k=1, workers=-1)[1].astype(np.int64)
+        trial = trees.map_every_vertex(fitted)
         if wound:
             before = reversed_share(vmap) if vmap_share is None else vmap_share  # step 12's figure when it ran
             after = reversed_share(trial)
@@ -1423,7 +1452,7 @@ def intrinsic_symmetry(
                 image, fitted = _sampled_zoomout(big, area, rows, start, np.array([kk, kk]), trees, refine_involution, brute=True)
                 if probe.near_self(image) >= _NEAR_SELF_LIMIT:
                     continue
-                trial = trees.dense(kk).query(phi_top @ fitted, k=1, workers=-1)[1].astype(np.int64)
+                trial = trees.map_every_vertex(fitted)
                 trial_share = reversed_share(trial)
                 if trial_share > best_share:
                     best_share, found = trial_share, (label, trial, fitted)
