@@ -277,8 +277,9 @@ def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Ge
 
     ``rows`` and one vertex (a random one) from each occupied cell of a cubic grid over
     ``points (V, 3)`` (a unit-area mesh), the cell side found by bisection so that the
-    union holds at most ``m`` vertices (more only when ``rows`` alone does). An even spread keeps every vertex near a kept one; a uniformly random subset
-    of the same size leaves gaps, and on the benchmark's twisted 12,900-vertex
+    union holds at most ``m`` vertices (more only when ``rows`` alone does). An even
+    spread keeps every vertex near a kept one; a uniformly random subset of the same size
+    leaves gaps, and on the benchmark's twisted 12,900-vertex
     mannequin-devil it raised the functional defect of step 9 from 0.42 (every vertex) to
     0.48 at 6,000 vertices and 0.50 at 4,000 (where step 10's limit, 0.5, made the solver
     try the extrinsic plane), against 0.41-0.44 for this subset at 3,000-6,000.
@@ -517,8 +518,9 @@ _COARSE_EPS = 0.5
 # 0.41 (its rate before search_vertices), FAUST tr_reg_076 rose 0.979 -> 0.995 and tr_reg_096
 # fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
 # cat10 (0.98 -> 0.25) and cat9 (0.75 -> 0.68), in the preimage searches alone cat9 (0.44);
-# unbalanced trees here (a further 0.03 s) cost dog10 0.99 -> 0.88. The sampled ZoomOut
-# rounds decide which map wins; these searches only read a settled map out.
+# unbalanced trees here (a further 0.03 s) cost dog10 0.99 -> 0.88. The sample's rounds steer
+# ZoomOut; these searches read out a map that has settled, though steps 12-14 still test it
+# (which is how another tree moved dog10).
 _DENSE_EPS = 0.5
 # Step 13 keeps the map polished in polish_k eigenfunctions unless its share of sampled
 # vertices where the orientation is reversed falls by more than this: on FAUST the polished
