@@ -266,7 +266,6 @@ class TestIntrinsicSymmetryModule:
         assert '"map"' in result.to_json()
 
 
-
 class TestVertexSubsample:
     """``search_vertices``: the searches on the vertex sample look among an even subset."""
 
@@ -305,10 +304,15 @@ class TestVertexSubsample:
             original(self, big, targets)
 
         monkeypatch.setattr(intrinsic._Searches, "__init__", spy)
-        out = intrinsic_symmetry(mesh, select_samples=160, search_vertices=300)
-        whole = intrinsic_symmetry(mesh, select_samples=160)
-        assert sizes[0] is not None and 160 <= sizes[0] <= 300 and sizes[1] is None  # 642 vertices
+        # (without the extrinsic plane, which would recover this exact mirror symmetry by itself)
+        out = intrinsic_symmetry(mesh, select_samples=160, search_vertices=320, extrinsic_hypothesis=False)
+        whole = intrinsic_symmetry(mesh, select_samples=160, extrinsic_hypothesis=False)
+        assert sizes[0] is not None and 160 <= sizes[0] <= 320 and sizes[1] is None  # 642 vertices
+        assert out.hypothesis == whole.hypothesis == "pairs"
         assert (out.map.numpy() == gt).mean() > 0.99 and (whole.map.numpy() == gt).mean() > 0.99
+        # at least twice the sample is searched, with a note
+        raised = intrinsic_symmetry(mesh, select_samples=160, search_vertices=200, extrinsic_hypothesis=False)
+        assert 200 < sizes[2] <= 320 and "search_vertices raised from 200 to 320, twice the vertex sample" in raised.notes
 
     def test_map_before_refine_is_a_near_nearest_map(self, solved):
         # when ZoomOut's map replaces it, the thesis's dense map comes from an approximate

@@ -116,11 +116,13 @@ class IntrinsicSymmetryResult(Result):
             ``R`` of the chosen hypothesis, before the ZoomOut rounds (equal to ``map`` when
             ``refine_iters == 0``); input order, ``-1`` for dropped vertices. Where the
             ZoomOut rounds' map replaced it, it is only reported, and it comes from an
-            approximate nearest-neighbour search: each image at most 1.5 times as far in
-            the embedding as the nearest row (``cKDTree.query(eps=0.5)``). On the
-            benchmark's twisted 12,900-vertex mannequin-devil that search returned the
-            nearest row for 89 % of the vertices, 1.0008 times as far on average, in
-            0.06 s against 0.30 s; the exact map is the result of ``refine_iters = 0``.
+            approximate nearest-neighbour search: each image at most 1.5 times as far as
+            the nearest candidate (``cKDTree.query(eps=0.5)``; in the embedding, or in
+            space for the extrinsic hypothesis). On the benchmark's twisted 12,900-vertex
+            mannequin-devil that search returned the nearest row for 89 % of the vertices,
+            1.0008 times as far on average, in 0.06 s against 0.30 s. Where it is the
+            result (``refine_iters = 0``, or no hypothesis could be refined) the search is
+            exact.
         refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
             round in the first ``k_r`` Laplace-Beltrami eigenfunctions ``Phi`` (``polish_k``
             when step 13's polished map was kept, else ``refine_k``)
@@ -296,8 +298,10 @@ def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Ge
         keys = (cells[:, 0] << 40) | (cells[:, 1] << 20) | cells[:, 2]
         return np.union1d(rows, order[np.unique(keys, return_index=True)[1]])
 
-    # a surface of area a holds about a / h^2 cells of side h; the mesh has unit area
-    lo, hi = max(0.25 / math.sqrt(m), span / 2.0**19), max(4.0 / math.sqrt(m), span / 2.0**19)
+    # a surface of area a holds about a / h^2 cells of side h; the mesh has unit area, and
+    # rows fill part of the m
+    free = m - rows.size
+    lo, hi = max(0.25 / math.sqrt(m), span / 2.0**19), max(4.0 / math.sqrt(free), span / 2.0**19)
     for _ in range(8):
         mid = math.sqrt(lo * hi)
         if subset(mid).size > m:
@@ -429,8 +433,11 @@ def _sampled_zoomout(
     ZoomOut settles on may keep the orientation over whole regions.
 
     With ``brute`` (step 14's rounds, far from a settled map, where the kd-trees in ``kk``
-    dimensions visit most of their leaves) the searches are :func:`_nearest_profiles`,
-    ``trees`` is not used, and each preimage is sought among the sample only.
+    dimensions visit most of their leaves) the searches are :func:`_nearest_profiles`
+    (no kd-tree), each image among ``trees``'s targets and each preimage among the sample only.
+
+    Every search here is exact among the vertices it searches: ``trees``'s targets, a
+    subset of the vertices on a large mesh (``search_vertices`` of :func:`intrinsic_symmetry`).
     """
     fitted = None
     for kk in ks:
@@ -513,10 +520,10 @@ _COARSE_EPS = 0.5
 # at most 1 + this times as far as the nearest row (cKDTree's eps). On the twisted
 # 12,900-vertex mannequin-devil such a search in 40 eigenfunctions returned the nearest row
 # for 98 % of the vertices, 1.0002 times as far on average, in 0.11 s against 0.26 s (0.06
-# against 0.11 s in 25), and the solver took about 1.5 s against 1.7 s. A replay of all 244
-# benchmark meshes kept every FAUST and TOSCA map; with holes, the man fell back from 0.50 to
-# 0.41 (its rate before search_vertices), FAUST tr_reg_076 rose 0.979 -> 0.995 and tr_reg_096
-# fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
+# against 0.11 s in 25), and the solver took 1.46 s against 1.71 s (bench_mesh timing row).
+# In the benchmark's run every rate of FAUST and TOSCA stayed within 0.1 point (8 and 5
+# shapes moved, by up to 0.08 point); with holes FAUST tr_reg_076 rose 0.979 -> 0.995 and
+# tr_reg_096 fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
 # cat10 (0.98 -> 0.25) and cat9 (0.75 -> 0.68), in the preimage searches alone cat9 (0.44);
 # unbalanced trees here (a further 0.03 s) cost dog10 0.99 -> 0.88. The sample's rounds steer
 # ZoomOut; these searches read out a map that has settled, though steps 12-14 still test it
@@ -798,7 +805,8 @@ def intrinsic_symmetry(
     6. With ``correct``, the rotation ``R`` of Eq. 6.4 (``mu``) by the Riemannian trust-region
        method, with the pairs' delta functions as ``F`` and ``G`` (Sec. 6.2.6).
     7. The dense map: nearest neighbour of each row of ``Phi R`` among the rows of
-       ``Phi R C`` (Sec. 6.2.7). With ``sign_hypotheses = m > 0`` (an extension) the
+       ``Phi R C`` (Sec. 6.2.7; approximate where step 11's map replaces it, see
+       ``map_before_refine``). With ``sign_hypotheses = m > 0`` (an extension) the
        ``2^m`` sign vectors that differ from the thesis's in its ``m`` least-confident
        eigenfunctions are tried first, each scored by how well its point map realises its
        own ``C`` (:func:`map_consistency`, on 800 seeded vertices); one replaces the
@@ -841,7 +849,8 @@ def intrinsic_symmetry(
         selection's vertex sample and the last one maps every vertex (there, and in the
         maps of every vertex of steps 12-14, by an approximate nearest-neighbour search:
         each image at most 1.5 times as far in the embedding as the nearest row; the
-        sample's searches are exact).
+        sample's searches are exact among the vertices they search, see
+        ``search_vertices``).
     12. With ``refine_orientation > 0`` (an extension), an orientation test of the final map
         (:func:`~torchsym.mesh.orientation.orientation_reversal` on the vertex sample): a
         reflection reverses the surface's orientation, so a map that reverses it at fewer
@@ -936,18 +945,24 @@ def intrinsic_symmetry(
             correspondence rate on FAUST, TOSCA and the synthetic meshes.
         search_vertices: on a mesh with more vertices than this, the searches on the vertex
             sample (steps 7 and 9-14) look for images and preimages among this many vertices
-            only: the sample and vertices spread evenly over the surface
-            (:func:`_even_subset`), as ZoomOut on a vertex subsample does (pyFM's
-            ``subsample``); the maps of every vertex still search every vertex. Those
-            searches, of maps still far from exact, were most of the time on large meshes:
-            on the benchmark's twisted 12,900-vertex mannequin-devil
-            (``benchmarks/bench_mesh.py --timing-only``) the solver took 1.71 s against
-            2.33 s before, together with the approximate search of ``map_before_refine``
-            (the subset alone: about 1.9 s). In a replay of the benchmark's meshes the synthetic ones
-            above 6,000 vertices kept their rates (a holed man rose from 0.41 to 0.50);
-            FAUST and TOSCA (up to 5,004 vertices) are untouched. 3,000 was faster but
-            changed the choice of step 9 on 5,000-vertex shapes (FAUST ``tr_reg_047`` 0.99 ->
-            0.75, TOSCA cat10 0.98 -> 0.25, cat9 0.75 -> 0.69).
+            only (at least twice the sample, raised with a note): the sample and vertices
+            spread evenly over the surface (:func:`_even_subset`, on a generator of its own),
+            as ZoomOut on a vertex subsample does (pyFM's ``subsample``); the maps of every
+            vertex still search every vertex. Those searches, of maps still far from exact,
+            took most of the time on large meshes: on the benchmark's twisted 12,900-vertex
+            mannequin-devil (``benchmarks/bench_mesh.py`` timing rows) the hypothesis
+            selection took 0.43 s against 0.73 s, and the whole solver, with the approximate
+            searches of the maps of every vertex, 1.46 s against 2.33 s. Snapped to the
+            subset, the sample's images lie a little off the true ones, so the tests of
+            step 9 (tuned on meshes searched whole) can score a map worse: on an exactly
+            symmetric 2,562-vertex test shape searched through 1,200 vertices the functional
+            defect rose from 0 to 0.15, while the twisted mannequin-devil's was 0.41 against
+            0.42. A replay of the benchmark's synthetic meshes above 6,000 vertices, with
+            and without holes, gave the same rates to 0.002; FAUST and TOSCA (up to 5,004
+            vertices) are untouched. 3,000 was faster but changed the choice of step 9 on
+            5,000-vertex shapes (FAUST ``tr_reg_047`` 0.99 -> 0.75, TOSCA cat10 0.98 ->
+            0.25, cat9 0.75 -> 0.69, measured while the subset still shared the generator of
+            the geodesic probe's vertices).
         max_distortion: largest sampled geodesic distortion (a mean relative error of
             distances) with which a hypothesis may replace the thesis's pairs. True
             symmetries score 0.02-0.05 on FAUST and about 0.1 on TOSCA's cats, whose
@@ -1258,7 +1273,11 @@ def intrinsic_symmetry(
     ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
     targets = None
     if n > search_vertices:
-        targets = _even_subset(v, rows, search_vertices, rng)
+        n_targets = max(search_vertices, 2 * rows.size)
+        if n_targets > search_vertices:
+            notes.append(f"search_vertices raised from {search_vertices} to {n_targets}, twice the vertex sample")
+        # a generator of its own, so that the draws below do not depend on search_vertices
+        targets = _even_subset(v, rows, n_targets, np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0]))
     trees = _Searches(big, targets)
     probe = GeodesicProbe(graph, rows, rng)
     seen: list[np.ndarray] = []
@@ -1439,7 +1458,6 @@ def intrinsic_symmetry(
         before = reversed_share(vmap) if vmap_share is None else vmap_share  # steps 12 / 13 measured it
         if before < _REALIGN_BELOW:
             kk = int(full.shape[0])
-            phi_top = big[:, :kk]  # (V', kk)
             psi = big[:, 1:kk] / np.maximum(big_evals[1:kk], np.finfo(float).tiny)  # (V', kk-1) biharmonic embedding
             sq_norms = np.einsum("ij,ij->i", psi, psi)  # (V',)
 
