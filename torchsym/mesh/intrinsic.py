@@ -285,6 +285,10 @@ def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Ge
     mannequin-devil it raised the functional defect of step 9 from 0.42 (every vertex) to
     0.48 at 6,000 vertices and 0.50 at 4,000 (where step 10's limit, 0.5, made the solver
     try the extrinsic plane), against 0.41-0.44 for this subset at 3,000-6,000.
+    pymeshlab's Poisson-disk simplification (``generate_simplified_point_cloud``) also keeps
+    input vertices, but its count is loose (4,444 asked 6,000 and 3,292 asked 3,000 on that
+    mesh) and it cannot be told to keep ``rows``; the grid costs one :func:`numpy.unique`
+    per bisection step (about 10 ms at 12,900 vertices).
     """
     rows = np.unique(rows)
     if rows.size >= m:
@@ -520,7 +524,7 @@ _COARSE_EPS = 0.5
 # at most 1 + this times as far as the nearest row (cKDTree's eps). On the twisted
 # 12,900-vertex mannequin-devil such a search in 40 eigenfunctions returned the nearest row
 # for 98 % of the vertices, 1.0002 times as far on average, in 0.11 s against 0.26 s (0.06
-# against 0.11 s in 25), and the solver took 1.46-1.62 s (two bench_mesh runs) against 1.71 s.
+# against 0.11 s in 25), and the solver took 1.46-1.62 s (three bench_mesh runs) against 1.71 s.
 # In the benchmark's run every rate of FAUST and TOSCA stayed within 0.1 point (8 and 5
 # shapes moved, by up to 0.08 point); with holes FAUST tr_reg_076 rose 0.979 -> 0.995 and
 # tr_reg_096 fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
@@ -952,7 +956,7 @@ def intrinsic_symmetry(
             took most of the time on large meshes: on the benchmark's twisted 12,900-vertex
             mannequin-devil (``benchmarks/bench_mesh.py`` timing rows) the hypothesis
             selection took 0.43-0.45 s against 0.73 s, and the whole solver, with the
-            approximate searches of the maps of every vertex, 1.46-1.62 s (two runs)
+            approximate searches of the maps of every vertex, 1.46-1.62 s (three runs)
             against 2.33 s. Snapped to the
             subset, the sample's images lie a little off the true ones, so the tests of
             step 9 (tuned on meshes searched whole) can score a map worse: on an exactly
