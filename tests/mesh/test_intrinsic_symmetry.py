@@ -564,22 +564,24 @@ class TestExtrinsicHypothesis:
             intrinsic_symmetry(mesh, extrinsic_samples=3)
 
 
+@pytest.fixture(scope="module")
+def spectral25(blob):
+    """The blob's first 25 eigenfunctions, areas, orientation operators, a 300-vertex sample and its ground truth."""
+    from torchsym.mesh.operators import mass_matrix
+    from torchsym.mesh.orientation import orientation_operators, reduce_descriptors
+
+    mesh, gt = blob
+    v, f = mesh.vertices.double().numpy(), mesh.faces.numpy()
+    evals, big = laplacian_eigen(v, f, 25, generator=torch.Generator().manual_seed(0))
+    area = mass_matrix(v, f).diagonal()
+    hks = heat_kernel_signature(evals[:13], big[:, :13], hks_times(evals[:13], 50))
+    ops = orientation_operators(v, f, big, reduce_descriptors(hks, area))  # (r, 25, 25)
+    rows = np.sort(np.random.default_rng(0).choice(v.shape[0], 300, replace=False))
+    return big, area, ops, rows, gt
+
+
 class TestOrientationCheck:
     """Step 12: a final map that keeps the surface's orientation is refined again with the orientation penalty."""
-
-    @pytest.fixture(scope="class")
-    def spectral25(self, blob):
-        from torchsym.mesh.operators import mass_matrix
-        from torchsym.mesh.orientation import orientation_operators, reduce_descriptors
-
-        mesh, gt = blob
-        v, f = mesh.vertices.double().numpy(), mesh.faces.numpy()
-        evals, big = laplacian_eigen(v, f, 25, generator=torch.Generator().manual_seed(0))
-        area = mass_matrix(v, f).diagonal()
-        hks = heat_kernel_signature(evals[:13], big[:, :13], hks_times(evals[:13], 50))
-        ops = orientation_operators(v, f, big, reduce_descriptors(hks, area))  # (r, 25, 25)
-        rows = np.sort(np.random.default_rng(0).choice(v.shape[0], 300, replace=False))
-        return big, area, ops, rows, gt
 
     def test_oriented_fit_is_the_exact_minimiser(self, spectral25):
         from torchsym.mesh.intrinsic import _oriented_fits, _zoomout_fit
