@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg
 import torch
 from scipy.spatial import cKDTree
+from threadpoolctl import threadpool_limits
 from torch import nn
 
 from torchsym.core.checks import check_in_range, check_int, check_positive
@@ -201,7 +202,7 @@ def map_consistency(tree: cKDTree, emb: np.ndarray, signs: np.ndarray, rows: np.
     nearest-neighbour search return points up to ``1 + approx`` times too far, which is
     several times faster in ``k`` dimensions where wrong signs put queries far from the data.
     """
-    _, target = tree.query(emb[rows] * signs, k=1, eps=approx)
+    _, target = tree.query(emb[rows] * signs, k=1, eps=approx, workers=-1)
     fitted = np.linalg.lstsq(emb[rows], emb[target], rcond=None)[0]  # (k, k)
     return float(np.linalg.norm(fitted - np.diag(signs)))
 
@@ -365,7 +366,7 @@ class _Searches:
             if kk not in self._sample:
                 self._sample[kk] = _kdtree(self.big[self.targets, :kk])
             tree = self._sample[kk]
-        return self.to_vertices(tree.query(queries, k=1)[1])
+        return self.to_vertices(tree.query(queries, k=1, workers=-1)[1])
 
 
 def _fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -454,7 +455,7 @@ def _sampled_zoomout(
             if brute:
                 pre = rows[_nearest_profiles(phi[rows], phi[rows] @ fitted)]
             else:
-                pre = trees.to_vertices(_kdtree(trees.sample_points(phi) @ fitted).query(phi[rows], k=1)[1])
+                pre = trees.to_vertices(_kdtree(trees.sample_points(phi) @ fitted).query(phi[rows], k=1, workers=-1)[1])
             fitted = nearest_involution(0.5 * (fitted + _zoomout_fit(phi, area, rows, pre, factor)))
         if brute:
             image = trees.to_vertices(_nearest_profiles(phi[rows] @ fitted, trees.sample_points(phi)))
@@ -676,7 +677,7 @@ def _extrinsic_candidate(
     plane = detect_reflection_plane(pts, kernel_stage=False, generator=gen)
     nrm, off = plane.normal.numpy(), float(plane.offset)
     mirrored = v - 2.0 * (v @ nrm + off)[:, None] * nrm  # (V, 3)
-    vmap = _kdtree(v).query(mirrored, k=1)[1].astype(np.int64)
+    vmap = _kdtree(v).query(mirrored, k=1, workers=-1)[1].astype(np.int64)
     cand = _Candidate(
         "extrinsic", pairs, pointwise_to_functional(evecs, area, vmap), np.eye(evecs.shape[1]), True, v, mirrored, True, []
     )
@@ -754,6 +755,13 @@ def _sign_hypotheses(
 
 
 @on_input_device
+# The dense linear algebra after the eigendecomposition is small (at most V x 40 times
+# 40 x 40), and the nearest-neighbour searches that dominate run on every core
+# (``workers=-1``); idle BLAS threads that spin between the small products took a core
+# from those searches: on the benchmark's twisted 12,900-vertex mannequin-devil the solver
+# took 1.45-1.55 s with scipy's default two BLAS threads and 1.25-1.30 s with one (median
+# of 5 runs each, 2-core machine; single-threaded searches gained nothing until then).
+@threadpool_limits.wrap(limits=1, user_api="blas")
 def intrinsic_symmetry(
     mesh: Mesh,
     *,
@@ -1290,7 +1298,7 @@ def intrinsic_symmetry(
 
     def score(cand: _Candidate) -> np.ndarray:
         cand.tree = _kdtree(trees.sample_points(cand.target))
-        image = trees.to_vertices(cand.tree.query(cand.query[rows], k=1)[1])  # (S,)
+        image = trees.to_vertices(cand.tree.query(cand.query[rows], k=1, workers=-1)[1])  # (S,)
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         cand.start = None if duplicate or not cand.usable else image
