@@ -101,6 +101,33 @@ class TestIntrinsicSymmetry:
         assert torch.equal(a.map, b.map) and torch.equal(a.rotation, b.rotation)
         assert torch.equal(a.functional_map, b.functional_map) and torch.equal(a.pairs, b.pairs)
 
+    def test_blas_on_one_thread_inside_and_restored_after(self, blob, monkeypatch):
+        # the solver holds BLAS to one thread (its searches use every core) and gives the
+        # caller's setting back
+        from threadpoolctl import threadpool_info, threadpool_limits
+
+        from torchsym.mesh import intrinsic
+
+        def blas_threads() -> dict:
+            return {d["filepath"]: d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"}
+
+        seen: list[dict] = []
+        original = intrinsic._sampled_zoomout
+
+        def spy(*args, **kwargs):
+            seen.append(blas_threads())
+            return original(*args, **kwargs)
+
+        monkeypatch.setattr(intrinsic, "_sampled_zoomout", spy)
+        mesh, _ = blob
+        with threadpool_limits(limits=2, user_api="blas"):
+            before = blas_threads()
+            intrinsic_symmetry(mesh)
+            after = blas_threads()
+        assert before and set(before.values()) == {2}
+        assert seen and all(set(s.values()) == {1} for s in seen)
+        assert after == before
+
     def test_correction_off(self, blob):
         mesh, gt = blob
         out = intrinsic_symmetry(mesh, correct=False)
