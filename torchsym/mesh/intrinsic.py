@@ -903,6 +903,11 @@ def intrinsic_symmetry(
         note). The final basis is ``polish_k`` eigenfunctions when step 13's map was kept,
         else ``refine_k``.
 
+    Threads: the call holds numpy's BLAS to one thread (``threadpoolctl``, restored on
+    return; process-wide, like every BLAS setting) and runs each kd-tree search on every
+    core (``workers=-1``): at 12,900 vertices on a 2-core machine that took about 15 %
+    less time than two BLAS threads with single-threaded searches (1.30 against 1.52 s).
+
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
         n_eigen: ``k``, eigenfunctions used (thesis: 13).
