@@ -525,7 +525,8 @@ _COARSE_EPS = 0.5
 # at most 1 + this times as far as the nearest row (cKDTree's eps). On the twisted
 # 12,900-vertex mannequin-devil such a search in 40 eigenfunctions returned the nearest row
 # for 98 % of the vertices, 1.0002 times as far on average, in 0.11 s against 0.26 s (0.06
-# against 0.11 s in 25), and the solver took 1.46-1.62 s (three bench_mesh runs, BLAS then on two threads) against 1.71 s.
+# against 0.11 s in 25), and the solver took 1.46-1.62 s (three bench_mesh runs, BLAS then
+# on two threads) against 1.71 s.
 # In the benchmark's run every rate of FAUST and TOSCA stayed within 0.1 point (8 and 5
 # shapes moved, by up to 0.08 point); with holes FAUST tr_reg_076 rose 0.979 -> 0.995 and
 # tr_reg_096 fell 0.975 -> 0.973. Not kept: the same eps in the sample's searches (1.38 s) broke TOSCA's
