@@ -540,7 +540,7 @@ class TestExtrinsicHypothesis:
         monkeypatch.setattr(intrinsic, "_extrinsic_candidate", lambda *a: (original(*a)[0], 0.1))
         out = intrinsic_symmetry(bumpy)
         assert out.hypothesis == "extrinsic"
-        assert any("symmetry score 0.10, under 0.75, but its refined map" in n for n in out.notes)
+        assert any("symmetry score 0.10, under 0.75, but each test of its refined map" in n for n in out.notes)
         monkeypatch.setattr(intrinsic, "_EXTRINSIC_CLEARLY", 0.3)
         out = intrinsic_symmetry(bumpy)
         assert out.hypothesis != "extrinsic" and any("did not replace it" in n for n in out.notes)

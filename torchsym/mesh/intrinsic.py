@@ -1357,11 +1357,11 @@ def intrinsic_symmetry(
         score_limit = extrinsic_min_score * (1.0 - patch_share)
         # a plane that is no extrinsic symmetry can still seed ZoomOut towards the intrinsic
         # one: its refined map is taken when every test clearly beats the weak map's
-        finite = bool(np.isfinite(row).all() and np.isfinite(table[best]).all())
-        clearly = finite and bool((row <= _EXTRINSIC_CLEARLY * table[best]).all())
-        if (plane_score >= score_limit or clearly) and np.isfinite(row).all() and row[-1] < limit:
+        passes = bool(np.isfinite(row).all() and row[-1] < limit)
+        clearly = bool(np.isfinite(table[best]).all() and (row <= _EXTRINSIC_CLEARLY * table[best]).all())
+        if passes and (plane_score >= score_limit or clearly):
             why = "" if plane_score >= score_limit else (
-                f", under {score_limit:.2f}, but its refined map's defects {np.array2string(row, precision=3)} are "
+                f", under {score_limit:.2f}, but each test of its refined map ({np.array2string(row, precision=3)}) is "
                 f"at most {_EXTRINSIC_CLEARLY:g} times the intrinsic map's"
             )
             extrinsic_note = (
