@@ -101,6 +101,26 @@ class TestIntrinsicSymmetry:
         assert torch.equal(a.map, b.map) and torch.equal(a.rotation, b.rotation)
         assert torch.equal(a.functional_map, b.functional_map) and torch.equal(a.pairs, b.pairs)
 
+    def test_branches_on_threads_give_the_serial_result(self, blob, monkeypatch):
+        # steps 9 and 14 run their independent branches on threads (run_branches): the
+        # result must be bit for bit the one of the branches run one after another
+        from torchsym.core.parallel import run_branches
+        from torchsym.mesh import intrinsic
+
+        mesh, _ = blob
+        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)  # step 14 runs
+        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)  # and its map is kept
+        sizes = []
+        monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: sizes.append(len(tasks)) or run_branches(tasks, 2))
+        threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        assert len(sizes) >= 2 and max(sizes) >= 2  # the hypotheses of step 9 and the two branches of step 14
+        monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: run_branches(tasks, 1))
+        serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        assert any(n.startswith("realigned by ") for n in threaded.notes)
+        assert torch.equal(threaded.map, serial.map)
+        assert torch.equal(threaded.refined_functional_map, serial.refined_functional_map)
+        assert threaded.notes == serial.notes
+
     def test_blas_on_one_thread_inside_and_restored_after(self, blob, monkeypatch):
         # the solver holds BLAS to one thread (its searches use every core) and gives the
         # caller's setting back

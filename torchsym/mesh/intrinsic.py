@@ -20,7 +20,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import threading
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -32,6 +34,7 @@ from threadpoolctl import threadpool_limits
 from torch import nn
 
 from torchsym.core.checks import check_in_range, check_int, check_positive
+from torchsym.core.parallel import run_branches
 from torchsym.core.random import make_generator, numpy_rng, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result, on_input_device
@@ -332,12 +335,14 @@ class _Searches:
         self.big, self.targets = big, targets
         self._dense: dict[int, cKDTree] = {}
         self._sample: dict[int, cKDTree] = {}
+        self._lock = threading.Lock()  # branches on threads (run_branches) share the trees
 
     def dense(self, kk: int) -> cKDTree:
         kk = int(kk)
-        if kk not in self._dense:
-            self._dense[kk] = _kdtree(self.big[:, :kk])
-        return self._dense[kk]
+        with self._lock:
+            if kk not in self._dense:
+                self._dense[kk] = _kdtree(self.big[:, :kk])
+            return self._dense[kk]
 
     def sample_points(self, points: np.ndarray) -> np.ndarray:
         """The rows of ``points (V, D)`` among which the sampled rounds search."""
@@ -363,9 +368,10 @@ class _Searches:
         if self.targets is None:
             tree = self.dense(kk)
         else:
-            if kk not in self._sample:
-                self._sample[kk] = _kdtree(self.big[self.targets, :kk])
-            tree = self._sample[kk]
+            with self._lock:
+                if kk not in self._sample:
+                    self._sample[kk] = _kdtree(self.big[self.targets, :kk])
+                tree = self._sample[kk]
         return self.to_vertices(tree.query(queries, k=1, workers=-1)[1])
 
 
@@ -913,6 +919,13 @@ def intrinsic_symmetry(
     return; process-wide, like every BLAS setting) and runs each kd-tree search on every
     core (``workers=-1``): at 12,900 vertices on a 2-core machine that took about 15 %
     less time than two BLAS threads with single-threaded searches (1.30 against 1.52 s).
+    Independent branches run on threads (:func:`~torchsym.core.parallel.run_branches`,
+    one per core): the hypotheses' refinements of step 9, the trials of step 12 and the
+    geodesic and biharmonic realignments of step 14, whose Dijkstra searches hold the
+    GIL while the other branch's products run. Each branch touches only its own data,
+    and the choices are made afterwards in the fixed order, so the result is the same
+    bits as run one after another. On every 8th FAUST / TOSCA shape (23 shapes, the same
+    maps) the median time went from 0.78 to 0.66 s, step 14's from 0.28 to 0.20 s.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
@@ -1317,13 +1330,19 @@ def intrinsic_symmetry(
     seen: list[np.ndarray] = []
     width = 3 if refine_k > n_eigen else 2
 
-    def score(cand: _Candidate) -> np.ndarray:
+    def screen(cand: _Candidate) -> np.ndarray | None:
+        # the hypothesis's map on the sample; None when it is not worth refining
         cand.tree = _kdtree(trees.sample_points(cand.target))
         image = trees.to_vertices(cand.tree.query(cand.query[rows], k=1, workers=-1)[1])  # (S,)
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         cand.start = None if duplicate or not cand.usable else image
         if not cand.usable or probe.near_self(image) >= _NEAR_SELF_LIMIT or duplicate:
+            return None
+        return image
+
+    def refine_score(cand: _Candidate, image: np.ndarray | None) -> np.ndarray:
+        if image is None:
             return np.full(width, np.inf)
         refined, fitted = _sampled_zoomout(big, area, rows, image, ks, trees, refine_involution)
         if probe.near_self(refined) >= _NEAR_SELF_LIMIT:
@@ -1338,7 +1357,15 @@ def intrinsic_symmetry(
             defects.append(_involution_defect(_fit_functional(big[rows, :refine_k], big[refined, :refine_k], area[rows])))
         return np.array([*defects, probe.distortion(refined)])
 
-    scores = [score(cand) for cand in candidates]
+    def score(cand: _Candidate) -> np.ndarray:
+        return refine_score(cand, screen(cand))
+
+    # screened in order (a duplicate of an earlier map is skipped), then refined on threads:
+    # each refinement touches only its own hypothesis
+    for kk in ks:
+        trees.nearest(kk, big[rows[:1], :kk])  # the sample's trees, built before the threads share them
+    screened = [screen(cand) for cand in candidates]
+    scores = run_branches([partial(refine_score, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
     limit = max_distortion_open if bool((edge_face_counts(f)[1] == 1).any()) else max_distortion
     best = _rank_choice(table, limit)
@@ -1444,16 +1471,20 @@ def intrinsic_symmetry(
                 fits = []
                 notes.append("orientation check: the penalised fit is numerically singular; the map is kept")
             bound = limit * _RESCUE_DISTORTION if chosen.refined is None else limit
-            for oriented in fits:
-                for schedule, start in starts:
-                    image, fitted = _sampled_zoomout(big, area, rows, start, schedule, trees, refine_involution, oriented)
-                    distortion = probe.distortion(image) if probe.near_self(image) < _REORIENTED_NEAR_SELF else math.inf
-                    if not distortion < bound:
-                        continue
-                    trial = trees.map_every_vertex(fitted)
-                    trial_share = reversed_share(trial)
-                    if trial_share >= best_share:
-                        best_share, found, found_distortion = trial_share, (trial, fitted), distortion
+
+            def reoriented(oriented: dict, schedule: np.ndarray, start: np.ndarray) -> tuple | None:
+                image, fitted = _sampled_zoomout(big, area, rows, start, schedule, trees, refine_involution, oriented)
+                distortion = probe.distortion(image) if probe.near_self(image) < _REORIENTED_NEAR_SELF else math.inf
+                if not distortion < bound:
+                    return None
+                trial = trees.map_every_vertex(fitted)
+                return trial, fitted, distortion, reversed_share(trial)
+
+            # independent trials, on threads; chosen in the order of the loops
+            trials = run_branches([partial(reoriented, o, sc, st) for o in fits for sc, st in starts])
+            for trial in trials:
+                if trial is not None and trial[3] >= best_share:
+                    best_share, found, found_distortion = trial[3], trial[:2], trial[2]
             if found is not None:
                 vmap, full = found
                 vmap_share = best_share
@@ -1508,16 +1539,25 @@ def intrinsic_symmetry(
                 return np.sqrt(np.maximum(sq, 0.0))
 
             anchors = rng.choice(rows, size=min(realign_anchors, rows.size), replace=False)  # (A,)
-            best_share, found = before + _REALIGN_GAIN, None
-            for label, distances in (("geodesic", lambda src: geodesic_distances(graph, src)), ("biharmonic", biharmonic)):
+
+            def realigned(distances) -> tuple[np.ndarray, np.ndarray, float] | None:
                 start = _anchor_realignment(distances, rows, vmap, anchors, realign_iters)
                 image, fitted = _sampled_zoomout(big, area, rows, start, np.array([kk, kk]), trees, refine_involution, brute=True)
                 if probe.near_self(image) >= _NEAR_SELF_LIMIT:
-                    continue
+                    return None
                 trial = trees.map_every_vertex(fitted)
-                trial_share = reversed_share(trial)
-                if trial_share > best_share:
-                    best_share, found = trial_share, (label, trial, fitted)
+                return trial, fitted, reversed_share(trial)
+
+            # the two branches share nothing mutable (the tree of every vertex is built
+            # first); run together, scipy's Dijkstra, which holds the GIL, overlaps the
+            # biharmonic branch's products
+            trees.dense(kk)
+            labels = ("geodesic", "biharmonic")
+            branches = run_branches([partial(realigned, lambda src: geodesic_distances(graph, src)), partial(realigned, biharmonic)])
+            best_share, found = before + _REALIGN_GAIN, None
+            for label, branch in zip(labels, branches):
+                if branch is not None and branch[2] > best_share:
+                    best_share, found = branch[2], (label, branch[0], branch[1])
             if found is not None:
                 label, vmap, full = found
                 notes.append(
