@@ -1326,14 +1326,17 @@ def intrinsic_symmetry(
         # a generator of its own, so that the draws below do not depend on search_vertices
         targets = _even_subset(v, rows, n_targets, np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0]))
     trees = _Searches(big, targets)
-    probe = GeodesicProbe(graph, rows, rng)
     seen: list[np.ndarray] = []
     width = 3 if refine_k > n_eigen else 2
 
-    def screen(cand: _Candidate) -> np.ndarray | None:
-        # the hypothesis's map on the sample; None when it is not worth refining
+    def first_image(cand: _Candidate) -> np.ndarray:
+        # the hypothesis's map on the sample
         cand.tree = _kdtree(trees.sample_points(cand.target))
-        image = trees.to_vertices(cand.tree.query(cand.query[rows], k=1, workers=-1)[1])  # (S,)
+        return trees.to_vertices(cand.tree.query(cand.query[rows], k=1, workers=-1)[1])  # (S,)
+
+    def screen(cand: _Candidate, image: np.ndarray | None = None) -> np.ndarray | None:
+        # the hypothesis's map on the sample; None when it is not worth refining
+        image = first_image(cand) if image is None else image
         duplicate = any(np.array_equal(image, other) for other in seen)
         seen.append(image)
         cand.start = None if duplicate or not cand.usable else image
@@ -1362,9 +1365,14 @@ def intrinsic_symmetry(
 
     # screened in order (a duplicate of an earlier map is skipped), then refined on threads:
     # each refinement touches only its own hypothesis
-    for kk in ks:
-        trees.nearest(kk, big[rows[:1], :kk])  # the sample's trees, built before the threads share them
-    screened = [screen(cand) for cand in candidates]
+    def sample_images() -> list[np.ndarray]:
+        for kk in ks:
+            trees.nearest(kk, big[rows[:1], :kk])  # the sample's trees, built before the threads share them
+        return [first_image(cand) for cand in candidates]
+
+    # the probe's Dijkstra searches (holding the GIL) beside the kd-trees' builds and searches
+    probe, images = run_branches([partial(GeodesicProbe, graph, rows, rng), sample_images])
+    screened = [screen(cand, image) for cand, image in zip(candidates, images)]
     scores = run_branches([partial(refine_score, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
     limit = max_distortion_open if bool((edge_face_counts(f)[1] == 1).any()) else max_distortion
