@@ -920,7 +920,8 @@ def intrinsic_symmetry(
     core (``workers=-1``): at 12,900 vertices on a 2-core machine that took about 15 %
     less time than two BLAS threads with single-threaded searches (1.30 against 1.52 s).
     Independent branches run on threads (:func:`~torchsym.core.parallel.run_branches`,
-    one per core): the hypotheses' refinements of step 9, the trials of step 12 and the
+    one per core): the orientation hypothesis's map (step 8) beside the pairing hypotheses (steps
+    4-7), the hypotheses' refinements of step 9, the trials of step 12 and the
     geodesic and biharmonic realignments of step 14, whose Dijkstra searches hold the
     GIL while the other branch's products run. Each branch touches only its own data,
     and the choices are made afterwards in the fixed order, so the result is the same
@@ -1258,55 +1259,63 @@ def intrinsic_symmetry(
         timings[k_] = 0.0
     timings["pairs"] = t_shared
     candidates: list[_Candidate] = []
-    for weight in weights:
-        cand_notes: list[str] = []
+
+    def pairings() -> None:
+        for weight in weights:
+            cand_notes: list[str] = []
+            tic = time.perf_counter()
+            pairs, _ = symmetric_pairs(
+                features, desc, evecs[features], distances=feat_dist, max_pairs=max_pairs, max_cost=max_pair_cost,
+                penalty=penalty, spectral_weight=weight,
+            )  # (P, 2)
+            if pairs.shape[0] == 0:
+                cand_notes.append("no pair of feature points passed the affinity test: no symmetry found, the map is the identity")
+            timings["pairs"], tic = timings["pairs"] + time.perf_counter() - tic, time.perf_counter()
+
+            signs, confidence = eigenfunction_signs(evecs, v, graph, pairs, cross_pairs=cross_pairs, min_confidence=min_confidence)  # (k,)
+            signs[0] = 1.0  # the constant eigenfunction is even
+            if not pairs.shape[0]:
+                signs[:] = 1.0  # no evidence: C = I, whose map is the identity
+            timings["signs"], tic = timings["signs"] + time.perf_counter() - tic, time.perf_counter()
+
+            rotation = np.eye(n_eigen)
+            converged = True
+            fb_sparse = np.concatenate([evecs[pairs[:, 0]], evecs[pairs[:, 1]]], axis=0).T  # (k, 2P)
+            gb_sparse = np.concatenate([evecs[pairs[:, 1]], evecs[pairs[:, 0]]], axis=0).T  # (k, 2P)
+            if correct and not pairs.shape[0]:
+                cand_notes.append("eigenfunction correction skipped: it needs at least one pair")
+            if correct and pairs.shape[0]:
+                res = correct_eigenfunctions(evals / evals[-1], fb_sparse, gb_sparse, signs, mu=mu, max_iter=max_iter)
+                rotation, converged = res.rotation.numpy(), converged and res.converged
+            timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
+
+            emb = evecs @ rotation  # (V', k)
+            if sign_hypotheses and pairs.shape[0]:
+                rng = numpy_rng(gen)
+                signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng, points=v, max_points=search_vertices)
+                if q_chosen < q_thesis:
+                    cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
+            use = signs != 0
+            # a map without an odd eigenfunction is the identity, which every test scores as perfect
+            usable = bool(pairs.shape[0]) and bool((signs < 0).any())
+            name = "pairs" if weight == spectral_weight else "hks_pairs"
+            candidates.append(
+                _Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
+            )
+            timings["map"] += time.perf_counter() - tic
+
+    def orientation_fmap() -> tuple[np.ndarray, float]:
         tic = time.perf_counter()
-        pairs, _ = symmetric_pairs(
-            features, desc, evecs[features], distances=feat_dist, max_pairs=max_pairs, max_cost=max_pair_cost,
-            penalty=penalty, spectral_weight=weight,
-        )  # (P, 2)
-        if pairs.shape[0] == 0:
-            cand_notes.append("no pair of feature points passed the affinity test: no symmetry found, the map is the identity")
-        timings["pairs"], tic = timings["pairs"] + time.perf_counter() - tic, time.perf_counter()
+        return orientation_reversing_map(v, f, evals, evecs, area, dense_desc), time.perf_counter() - tic  # (k, k)
 
-        signs, confidence = eigenfunction_signs(evecs, v, graph, pairs, cross_pairs=cross_pairs, min_confidence=min_confidence)  # (k,)
-        signs[0] = 1.0  # the constant eigenfunction is even
-        if not pairs.shape[0]:
-            signs[:] = 1.0  # no evidence: C = I, whose map is the identity
-        timings["signs"], tic = timings["signs"] + time.perf_counter() - tic, time.perf_counter()
-
-        rotation = np.eye(n_eigen)
-        converged = True
-        fb_sparse = np.concatenate([evecs[pairs[:, 0]], evecs[pairs[:, 1]]], axis=0).T  # (k, 2P)
-        gb_sparse = np.concatenate([evecs[pairs[:, 1]], evecs[pairs[:, 0]]], axis=0).T  # (k, 2P)
-        if correct and not pairs.shape[0]:
-            cand_notes.append("eigenfunction correction skipped: it needs at least one pair")
-        if correct and pairs.shape[0]:
-            res = correct_eigenfunctions(evals / evals[-1], fb_sparse, gb_sparse, signs, mu=mu, max_iter=max_iter)
-            rotation, converged = res.rotation.numpy(), converged and res.converged
-        timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
-
-        emb = evecs @ rotation  # (V', k)
-        if sign_hypotheses and pairs.shape[0]:
-            rng = numpy_rng(gen)
-            signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng, points=v, max_points=search_vertices)
-            if q_chosen < q_thesis:
-                cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
-        use = signs != 0
-        # a map without an odd eigenfunction is the identity, which every test scores as perfect
-        usable = bool(pairs.shape[0]) and bool((signs < 0).any())
-        name = "pairs" if weight == spectral_weight else "hks_pairs"
-        candidates.append(
-            _Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
-        )
-        timings["map"] += time.perf_counter() - tic
+    # the orientation hypothesis's map (numpy products) beside the pairing hypotheses, on a
+    # thread of its own: it shares nothing with them and draws nothing from the generator
+    branches = run_branches([pairings, orientation_fmap] if orientation_hypothesis else [pairings])
     if orientation_hypothesis:
-        tic = time.perf_counter()
-        fmap = orientation_reversing_map(v, f, evals, evecs, area, dense_desc)  # (k, k)
+        fmap, timings["orientation"] = branches[1]
         candidates.append(
             _Candidate("orientation", candidates[0].pairs, fmap, np.eye(n_eigen), True, evecs @ fmap.T, evecs, True, [])
         )
-        timings["orientation"] = time.perf_counter() - tic
 
     # choose a hypothesis on a vertex sample: each one's map, refined by sampled ZoomOut,
     # scored by three tests of an isometric involution
