@@ -117,7 +117,7 @@ class TestIntrinsicSymmetry:
         monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: run_branches(tasks, 1))
         serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert any(n.startswith("realigned by ") for n in threaded.notes)
-        assert torch.equal(threaded.map, serial.map)
+        assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)
         assert torch.equal(threaded.refined_functional_map, serial.refined_functional_map)
         assert threaded.notes == serial.notes
 

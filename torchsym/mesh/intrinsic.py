@@ -921,7 +921,8 @@ def intrinsic_symmetry(
     less time than two BLAS threads with single-threaded searches (1.30 against 1.52 s).
     Independent branches run on threads (:func:`~torchsym.core.parallel.run_branches`,
     one per core): the orientation hypothesis's map (step 8) beside the pairing hypotheses (steps
-    4-7), the hypotheses' refinements of step 9, the trials of step 12 and the
+    4-7), the hypotheses' refinements of step 9, step 11's map of every vertex beside
+    step 7's (reported as ``map_before_refine``), the trials of step 12 and the
     geodesic and biharmonic realignments of step 14, whose Dijkstra searches hold the
     GIL while the other branch's products run. Each branch touches only its own data,
     and the choices are made afterwards in the fixed order, so the result is the same
@@ -1436,21 +1437,30 @@ def intrinsic_symmetry(
         )
 
     tic = time.perf_counter()
-    dense_tree = _kdtree(chosen.target, balanced=False)
     # the thesis's dense map; when ZoomOut's map replaces it, it is only reported, and an
     # approximate search (images at most 1 + _COARSE_EPS times too far) is enough
     eps = _COARSE_EPS if refine_iters and chosen.refined is not None else 0.0
-    vmap = dense_tree.query(chosen.query, k=1, eps=eps, workers=-1)[1].astype(np.int64)  # (V',)
-    timings["map"] += time.perf_counter() - tic
-    coarse_map = vmap
+
+    def thesis_map() -> tuple[np.ndarray, float]:
+        tic = time.perf_counter()
+        dense_tree = _kdtree(chosen.target, balanced=False)
+        return dense_tree.query(chosen.query, k=1, eps=eps, workers=-1)[1].astype(np.int64), time.perf_counter() - tic  # (V',)
+
+    def refined_map() -> tuple[np.ndarray, float]:
+        tic = time.perf_counter()
+        return trees.map_every_vertex(chosen.refined), time.perf_counter() - tic  # (V',)
+
+    # step 11's map of every vertex beside the thesis's (both searches, on threads)
+    refined = bool(refine_iters) and chosen.refined is not None
+    maps = run_branches([thesis_map, refined_map] if refined else [thesis_map])
+    (coarse_map, t_map), vmap = maps[0], maps[0][0]
+    timings["map"] += t_map
     full = np.zeros((0, 0))
     if refine_iters:
         timings["refine"] = 0.0
-    if refine_iters and chosen.refined is not None:
-        tic = time.perf_counter()
+    if refined:
         full = chosen.refined  # (k_r, k_r), fitted on the sample
-        vmap = trees.map_every_vertex(full)
-        timings["refine"] = time.perf_counter() - tic
+        vmap, timings["refine"] = maps[1]
     rescued = False
 
     def reversed_share(vertex_map: np.ndarray) -> float:
