@@ -1375,8 +1375,6 @@ def intrinsic_symmetry(
     def score(cand: _Candidate) -> np.ndarray:
         return refine_score(cand, screen(cand))
 
-    # screened in order (a duplicate of an earlier map is skipped), then refined on threads:
-    # each refinement touches only its own hypothesis
     def sample_images() -> list[np.ndarray]:
         for kk in ks:
             trees.nearest(kk, big[rows[:1], :kk])  # the sample's trees, built before the threads share them
@@ -1384,6 +1382,8 @@ def intrinsic_symmetry(
 
     # the probe's Dijkstra searches (holding the GIL) beside the kd-trees' builds and searches
     probe, images = run_branches([partial(GeodesicProbe, graph, rows, rng), sample_images])
+    # screened in order (a duplicate of an earlier map is skipped), then refined on threads:
+    # each refinement touches only its own hypothesis
     screened = [screen(cand, image) for cand, image in zip(candidates, images)]
     scores = run_branches([partial(refine_score, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
