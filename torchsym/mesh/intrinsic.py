@@ -143,7 +143,10 @@ class IntrinsicSymmetryResult(Result):
             ``signs``, ``correction``, ``map``, summed over the pairing hypotheses,
             ``orientation``, ``select``, ``extrinsic`` when that hypothesis was tried,
             ``refine``, ``orientation_check`` when step 12 ran, ``polish`` and ``realign``
-            when steps 13 and 14 ran) and ``total``.
+            when steps 13 and 14 ran) and ``total``. Stages that ran side by side on
+            threads (``orientation`` beside ``pairs`` to ``map``, ``refine`` beside the
+            last part of ``map``) each count their own time, so the stages can add up to
+            more than ``total``.
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the component that was solved.
         correction_converged: whether every trust-region run of the chosen hypothesis
