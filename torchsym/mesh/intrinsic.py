@@ -626,8 +626,10 @@ def _nearest_profiles(queries: np.ndarray, profiles: np.ndarray, chunk: int = 51
     q = queries.astype(np.float32)
     out = np.empty(q.shape[0], dtype=np.int64)
     for start in range(0, q.shape[0], chunk):
-        block = q[start : start + chunk]  # (b, A)
-        out[start : start + chunk] = np.argmin(norms[None, :] - 2.0 * block @ prof.T, axis=1)
+        dist = q[start : start + chunk] @ prof.T  # (b, V)
+        dist *= -2.0  # in place: |p|^2 - 2 q.p, the same bits as the expression, without its temporaries
+        dist += norms
+        out[start : start + chunk] = np.argmin(dist, axis=1)
     return out
 
 
