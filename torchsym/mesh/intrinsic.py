@@ -1460,7 +1460,8 @@ def intrinsic_symmetry(
     # step 11's map of every vertex beside the thesis's (both searches, on threads)
     refined = bool(refine_iters) and chosen.refined is not None
     maps = run_branches([thesis_map, refined_map] if refined else [thesis_map])
-    (coarse_map, t_map), vmap = maps[0], maps[0][0]
+    coarse_map, t_map = maps[0]
+    vmap = coarse_map
     timings["map"] += t_map
     full = np.zeros((0, 0))
     if refine_iters:
