@@ -932,9 +932,9 @@ def intrinsic_symmetry(
     GIL while the other branch's products run. Each branch touches only its own data,
     and the choices are made afterwards in the fixed order, so the result is the same
     bits as run one after another. In ``benchmarks/bench_mesh.py``, with every map the
-    same, the median time per FAUST / TOSCA shape went from 0.73 / 0.89 to 0.53 / 0.66 s
-    (step 14's, on every 8th shape, from 0.28 to 0.18 s) and the twisted 12,900-vertex
-    mannequin-devil's from 1.25 to 1.02 s.
+    same, the median time per FAUST / TOSCA shape went from 0.73 / 0.89 to 0.52 / 0.65 s
+    (step 14's, on every 8th shape, from 0.28 to 0.16 s) and the twisted 12,900-vertex
+    mannequin-devil's from 1.25 to 0.98 s.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
