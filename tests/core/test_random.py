@@ -1,7 +1,9 @@
 import pytest
 import torch
 
-from torchsym.core.random import make_generator, numpy_rng, random_subset
+import numpy as np
+
+from torchsym.core.random import draw_seed, make_generator, numpy_rng, random_subset
 from torchsym.errors import InputValueError
 
 
@@ -21,6 +23,13 @@ class TestRandom:
         random_subset(100, 10, None)
         numpy_rng(None).random()
         assert torch.equal(torch.rand(3), expected)
+
+    def test_numpy_rng_is_seeded_by_one_draw(self):
+        a, b = make_generator(9), make_generator(9)
+        seed = draw_seed(a)
+        assert 0 <= seed < 2**62
+        assert np.random.default_rng(seed).random() == numpy_rng(b).random()
+        assert draw_seed(a) == draw_seed(b)  # both advanced by one draw
 
     def test_subset_all(self):
         assert torch.equal(random_subset(5, 9), torch.arange(5))

@@ -339,6 +339,50 @@ class TestVertexSubsample:
         assert np.array_equal(sub, _even_subset(v, rows, 500, np.random.default_rng(1)))
         assert np.array_equal(_even_subset(v, rows, 50, np.random.default_rng(1)), rows)
 
+    def test_nearest_is_exact_by_tree_and_by_brute_force(self, monkeypatch):
+        # queries near the points go to the kd-tree, far ones to brute force; both exact
+        from scipy.spatial import cKDTree
+
+        from torchsym.mesh import intrinsic
+
+        rng = np.random.default_rng(0)
+        points = rng.standard_normal((3000, 16))
+        near = points[rng.choice(3000, size=600)] + 1e-3 * rng.standard_normal((600, 16))
+        far = 3.0 * rng.standard_normal((600, 16))
+        truth = cKDTree(points)
+        used = []
+        original = intrinsic._Nearest.brute
+        monkeypatch.setattr(intrinsic._Nearest, "brute", lambda self, q, *a, **k: used.append(q.shape[0]) or original(self, q, *a, **k))
+        search = intrinsic._Nearest(points)
+        assert np.array_equal(search.query(near), truth.query(near)[1])
+        assert used == [near[::32].shape[0]]  # the probe only
+        assert np.array_equal(search.query(far), truth.query(far)[1])
+        assert used[-1] == far.shape[0]  # all by brute force
+        index, dist = search.brute(far[:50], dist=True)
+        assert np.allclose(dist, truth.query(far[:50])[0], rtol=1e-10)
+
+    def test_sample_seed_read_ahead(self, blob, monkeypatch):
+        # step 9's sample is drawn from the seed after the eigensolver's and one per pairing
+        # with pairs; with the HKS pairing left without pairs, that is the third draw
+        from torchsym.core.random import draw_seed
+        from torchsym.mesh import intrinsic
+
+        mesh, _ = blob
+        pairs_fn, probe_cls, seen = intrinsic.symmetric_pairs, intrinsic.GeodesicProbe, []
+
+        def no_hks_pairs(*args, **kwargs):
+            pairs, cost = pairs_fn(*args, **kwargs)
+            assert pairs.shape[0] > 0  # both pairings find pairs here: the guess of two sign draws would be right
+            return (pairs[:0], cost) if kwargs["spectral_weight"] == 0.0 else (pairs, cost)
+
+        monkeypatch.setattr(intrinsic, "symmetric_pairs", no_hks_pairs)
+        monkeypatch.setattr(intrinsic, "GeodesicProbe", lambda graph, rows, rng: seen.append(rows) or probe_cls(graph, rows, rng))
+        intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(5), select_samples=200)
+        gen = torch.Generator().manual_seed(5)
+        seed = [draw_seed(gen) for _ in range(3)][-1]
+        expected = np.sort(np.random.default_rng(seed).choice(mesh.num_vertices, size=200, replace=False))
+        assert np.array_equal(seen[0], expected)
+
     def test_recovers_the_symmetry_searching_a_subset(self, blob, monkeypatch):
         from torchsym.mesh import intrinsic
 

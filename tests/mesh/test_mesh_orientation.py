@@ -250,6 +250,22 @@ class TestOrientationReversal:
             orientation_reversal(v, f, gt, neighbourhood=given[:5])
         assert np.all(orientation_reversal(v, f, np.zeros(v.shape[0], dtype=np.int64)) == 0)  # all to one vertex
 
+    def test_orientation_test_gives_the_same_bits(self, blob):
+        # the precomputed frames (the solver tests many maps on one sample) change nothing
+        from torchsym.mesh.operators import ring_neighbourhood
+        from torchsym.mesh.orientation import OrientationTest, orientation_reversal
+
+        mesh, gt = blob
+        v, f = mesh.vertices.double().numpy(), mesh.faces.numpy()
+        rng = np.random.default_rng(0)
+        rows = np.sort(rng.choice(v.shape[0], size=v.shape[0] // 3, replace=False))
+        near = ring_neighbourhood(f, v.shape[0], rings=2)
+        test = OrientationTest(v, f, rows, near)
+        holed = gt.copy()
+        holed[rng.choice(v.shape[0], size=20, replace=False)] = -1
+        for vmap in (gt, rng.integers(0, v.shape[0], v.shape[0]), holed):
+            assert np.array_equal(test(vmap), orientation_reversal(v, f, vmap, rows=rows, neighbourhood=near))
+
     def test_anticommutation_penalty_separates_mirror_from_identity(self, spectral_blob):
         from torchsym.mesh.orientation import (
             anticommutation_penalty,

@@ -14,7 +14,7 @@ import torch
 
 from torchsym.errors import InputValueError
 
-__all__ = ["DEFAULT_SEED", "make_generator", "numpy_rng", "random_subset"]
+__all__ = ["DEFAULT_SEED", "draw_seed", "make_generator", "numpy_rng", "random_subset"]
 
 DEFAULT_SEED = 0
 
@@ -32,11 +32,14 @@ def make_generator(generator: torch.Generator | int | None = None) -> torch.Gene
     return g
 
 
+def draw_seed(generator: torch.Generator | None) -> int:
+    """A seed in ``[0, 2^62)`` drawn from ``generator`` (advancing it once)."""
+    return int(torch.randint(0, 2**62, (1,), generator=make_generator(generator)).item())
+
+
 def numpy_rng(generator: torch.Generator | None) -> np.random.Generator:
-    """A NumPy generator whose seed is drawn from ``generator`` (advancing it once)."""
-    g = make_generator(generator)
-    seed = int(torch.randint(0, 2**62, (1,), generator=g).item())
-    return np.random.default_rng(seed)
+    """A NumPy generator whose seed is drawn from ``generator`` (advancing it once): ``default_rng(draw_seed(generator))``."""
+    return np.random.default_rng(draw_seed(generator))
 
 
 def random_subset(n: int, k: int, generator: torch.Generator | None = None) -> torch.Tensor:

@@ -35,7 +35,7 @@ from torch import nn
 
 from torchsym.core.checks import check_in_range, check_int, check_positive
 from torchsym.core.parallel import run_branches
-from torchsym.core.random import make_generator, numpy_rng, random_subset
+from torchsym.core.random import draw_seed, make_generator, numpy_rng, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result, on_input_device
 from torchsym.errors import InputValueError
@@ -53,9 +53,9 @@ from torchsym.mesh.operators import (
     ring_neighbourhood,
 )
 from torchsym.mesh.orientation import (
+    OrientationTest,
     anticommutation_penalty,
     orientation_operators,
-    orientation_reversal,
     orientation_reversing_map,
     reduce_descriptors,
 )
@@ -259,7 +259,6 @@ class _Candidate:
     notes: list[str]
     refined: np.ndarray | None = None
     start: np.ndarray | None = None
-    tree: cKDTree | None = None
 
 
 def _kdtree(points: np.ndarray, balanced: bool = True) -> cKDTree:
@@ -323,22 +322,112 @@ def _even_subset(points: np.ndarray, rows: np.ndarray, m: int, rng: np.random.Ge
     return out if out.size <= m else rows
 
 
-class _Searches:
-    """Nearest rows of the eigenfunction embedding ``big[:, :kk]``, with kd-trees built once per ``kk``.
+_BRUTE_BEYOND = 3.0  # _Nearest: brute force when the queries' nearest points lie beyond this many spacings
 
-    :meth:`dense` is the tree over every vertex, for the maps of every vertex. :meth:`nearest`
-    answers the sampled rounds (ZoomOut on the vertex sample, steps 9-14) among ``targets``
-    only (sorted vertex indices holding the sample, :func:`_even_subset`; None: every
-    vertex), as ZoomOut on a vertex subsample does (pyFM's ``subsample``): the sampled
-    rounds' queries, far from the points while the map is inexact, then search a tree a
-    fraction of the size, and only the maps of every vertex search them all.
+
+class _Nearest:
+    """Exact nearest rows of ``points (N, D)``: by a kd-tree, or by brute force when the queries lie far from the points.
+
+    The sampled rounds of steps 9-13 search ``N`` of about 1,000-6,000 rows for 1,000
+    queries. A kd-tree answers a query near its nearest point quickly, but the queries of a
+    map that is still inexact can lie far from the points and visit most of its leaves.
+    So every 32nd query is first answered by brute force; when their nearest points lie a
+    median of more than ``_BRUTE_BEYOND`` times the points' spacing away (the median distance
+    between neighbouring points, from 256 of them), all queries are, else the kd-tree
+    answers them. Brute force is ``argmin_j |p_j|^2 - 2 q.p_j`` with the points augmented
+    once to ``[P | |p|^2]`` and each block of queries to ``[-2 q | 1]`` (one float64
+    product; rounding about ``1e-16`` of ``|p|^2``, far below the gaps between neighbours).
+    Both are exact, so the rows are those of the kd-tree's search but for exact ties, and
+    the choice between them, made from the data alone, is deterministic.
+
+    Over the sampled rounds of 32 benchmark meshes (FAUST, TOSCA, synthetic; 659 searches)
+    the kd-tree took 0.69x the time of brute force (on two threads) where the probes' median
+    lay within 2 spacings, 0.9-1.0x within 2-6, and 1.5-2.2x beyond; on the twisted
+    12,900-vertex mannequin-devil the searches of its farthest hypothesis (a median 5-23
+    spacings away, 1,000 queries among 5,975 rows) took 12-16 ms on the kd-tree and 6-7 ms
+    by brute force.
+    """
+
+    def __init__(self, points: np.ndarray, spacing: float | None = None, tree: cKDTree | None = None):
+        self.points = np.asarray(points, dtype=np.float64)
+        self.dim = self.points.shape[1]
+        self._tree = tree
+        self._aug_t: np.ndarray | None = None  # (D + 1, N), built on the first brute-force search
+        self._spacing = spacing
+
+    @property
+    def tree(self) -> cKDTree:
+        if self._tree is None:
+            self._tree = _kdtree(self.points)
+        return self._tree
+
+    @property
+    def spacing(self) -> float:
+        """The median distance from a point to its nearest other point (from 256 points)."""
+        if self._spacing is None:
+            probe = self.points[:: max(1, self.points.shape[0] // 256)]
+            gaps = self.tree.query(probe, k=2, workers=1)[0][:, 1] if self.points.shape[0] > 1 else np.zeros(1)
+            self._spacing = float(np.median(gaps))
+        return self._spacing
+
+    def _block(self, queries: np.ndarray, chunk: int, dist: bool = False):
+        out = np.empty(queries.shape[0], dtype=np.int64)
+        best = np.empty(queries.shape[0])
+        for start in range(0, queries.shape[0], chunk):
+            q = queries[start : start + chunk]
+            aug = np.empty((q.shape[0], self.dim + 1))  # (b, D + 1)
+            np.multiply(q, -2.0, out=aug[:, :-1])
+            aug[:, -1] = 1.0
+            prod = aug @ self._aug_t  # (b, N): squared distances less |q|^2
+            out[start : start + chunk] = np.argmin(prod, axis=1)
+            if dist:
+                best[start : start + chunk] = prod[np.arange(q.shape[0]), out[start : start + chunk]] + np.einsum("ij,ij->i", q, q)
+        return (out, np.sqrt(np.maximum(best, 0.0))) if dist else out
+
+    def prepare(self) -> _Nearest:
+        """Build the kd-tree, the spacing and the augmented points now (before threads share them)."""
+        _ = self.spacing
+        if self._aug_t is None:
+            aug_t = np.empty((self.dim + 1, self.points.shape[0]))
+            aug_t[:-1] = self.points.T
+            aug_t[-1] = np.einsum("ij,ij->i", self.points, self.points)
+            self._aug_t = aug_t
+        return self
+
+    def brute(self, queries: np.ndarray, chunk: int = 128, dist: bool = False):
+        """Brute force: for each row of ``queries (Q, D)`` the index of the nearest point (and, with ``dist``, its distance)."""
+        if self._aug_t is None:
+            self.prepare()
+        queries = np.asarray(queries, dtype=np.float64)
+        if dist or queries.shape[0] < 2 * chunk:
+            return self._block(queries, chunk, dist)
+        half = queries.shape[0] // 2
+        return np.concatenate(run_branches([partial(self._block, queries[:half], chunk), partial(self._block, queries[half:], chunk)]))
+
+    def query(self, queries: np.ndarray) -> np.ndarray:
+        """For each row of ``queries (Q, D)`` the index of the nearest point, ``(Q,)`` int64."""
+        _, far = self.brute(queries[::32], dist=True)
+        if float(np.median(far)) > _BRUTE_BEYOND * self.spacing:
+            return self.brute(queries)
+        return self.tree.query(queries, k=1, workers=-1)[1].astype(np.int64)
+
+
+class _Searches:
+    """Nearest rows of the eigenfunction embedding ``big[:, :kk]``, each search structure built once per ``kk``.
+
+    :meth:`dense` is the kd-tree over every vertex, for the maps of every vertex. :meth:`nearest`
+    answers the sampled rounds (ZoomOut on the vertex sample, steps 9-13) by brute force
+    (:class:`_Nearest`) among ``targets`` only (sorted vertex indices holding the sample,
+    :func:`_even_subset`; None: every vertex), as ZoomOut on a vertex subsample does
+    (pyFM's ``subsample``): the sampled rounds then search a fraction of the vertices,
+    and only the maps of every vertex search them all.
     """
 
     def __init__(self, big: np.ndarray, targets: np.ndarray | None):
         self.big, self.targets = big, targets
         self._dense: dict[int, cKDTree] = {}
-        self._sample: dict[int, cKDTree] = {}
-        self._lock = threading.Lock()  # branches on threads (run_branches) share the trees
+        self._sample: dict[int, _Nearest] = {}
+        self._lock = threading.Lock()  # branches on threads (run_branches) share the structures
 
     def dense(self, kk: int) -> cKDTree:
         kk = int(kk)
@@ -346,6 +435,15 @@ class _Searches:
             if kk not in self._dense:
                 self._dense[kk] = _kdtree(self.big[:, :kk])
             return self._dense[kk]
+
+    def sample(self, kk: int) -> _Nearest:
+        """The search among the targets' rows of ``big[:, :kk]`` (over every vertex: on :meth:`dense`'s tree)."""
+        kk = int(kk)
+        tree = self.dense(kk) if self.targets is None else None
+        with self._lock:
+            if kk not in self._sample:
+                self._sample[kk] = _Nearest(self.sample_points(self.big[:, :kk]), tree=tree).prepare()
+            return self._sample[kk]
 
     def sample_points(self, points: np.ndarray) -> np.ndarray:
         """The rows of ``points (V, D)`` among which the sampled rounds search."""
@@ -367,15 +465,7 @@ class _Searches:
 
     def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
         """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest."""
-        kk = int(kk)
-        if self.targets is None:
-            tree = self.dense(kk)
-        else:
-            with self._lock:
-                if kk not in self._sample:
-                    self._sample[kk] = _kdtree(self.big[self.targets, :kk])
-                tree = self._sample[kk]
-        return self.to_vertices(tree.query(queries, k=1, workers=-1)[1])
+        return self.to_vertices(self.sample(kk).query(queries))
 
 
 def _fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -464,7 +554,8 @@ def _sampled_zoomout(
             if brute:
                 pre = rows[_nearest_profiles(phi[rows], phi[rows] @ fitted)]
             else:
-                pre = trees.to_vertices(_kdtree(trees.sample_points(phi) @ fitted).query(phi[rows], k=1, workers=-1)[1])
+                # (C is near an orthogonal matrix, which keeps the spacing of the points)
+                pre = trees.to_vertices(_Nearest(trees.sample_points(phi) @ fitted, trees.sample(kk).spacing).query(phi[rows]))
             fitted = nearest_involution(0.5 * (fitted + _zoomout_fit(phi, area, rows, pre, factor)))
         if brute:
             image = trees.to_vertices(_nearest_profiles(phi[rows] @ fitted, trees.sample_points(phi)))
@@ -925,16 +1016,25 @@ def intrinsic_symmetry(
     core (``workers=-1``): at 12,900 vertices on a 2-core machine that took about 15 %
     less time than two BLAS threads with single-threaded searches (1.30 against 1.52 s).
     Independent branches run on threads (:func:`~torchsym.core.parallel.run_branches`,
-    one per core): the orientation hypothesis's map (step 8) beside the pairing hypotheses (steps
-    4-7), the hypotheses' refinements of step 9, step 11's map of every vertex beside
-    step 7's (reported as ``map_before_refine``), the trials of step 12 and the
-    geodesic and biharmonic realignments of step 14, whose Dijkstra searches hold the
-    GIL while the other branch's products run. Each branch touches only its own data,
-    and the choices are made afterwards in the fixed order, so the result is the same
-    bits as run one after another. In ``benchmarks/bench_mesh.py``, with every map the
-    same, the median time per FAUST / TOSCA shape went from 0.73 / 0.89 to 0.52 / 0.65 s
-    (step 14's, on every 8th shape, from 0.28 to 0.16 s) and the twisted 12,900-vertex
-    mannequin-devil's from 1.25 to 0.98 s.
+    one per core): beside the eigensolver (ARPACK, single-threaded), what needs no
+    eigenpair (the edge graph, 2-rings, areas, boundary and winding tests, and step 9's
+    vertex sample with the orientation test's frames on it, for each seed that step 9 may
+    draw: see below); the orientation hypothesis's map (step 8) with step 9's geodesic probe
+    and the sampled searches beside the pairing hypotheses (steps 5-7); the
+    hypotheses' refinements of step 9; step 11's map of every vertex beside step 7's
+    (reported as ``map_before_refine``); the trials of step 12 and the geodesic and
+    biharmonic realignments of step 14, whose Dijkstra searches hold the GIL while the
+    other branch's products run. Each branch touches only its own data, and the choices
+    are made afterwards in the fixed order, so the result is the same bits as run one after
+    another. Step 9's sample is drawn from the generator after the eigensolver's draw and
+    the sign hypotheses' (one per pairing with pairs), so its seed is known only after
+    step 4: each possible seed is read ahead from a copy of the generator, and the true
+    one's sample is used. In ``benchmarks/bench_mesh.py``, with every map the same, the
+    median time per FAUST / TOSCA shape went from 0.73 / 0.89 to 0.52 / 0.65 s (step
+    14's, on every 8th shape, from 0.28 to 0.16 s) and the twisted 12,900-vertex
+    mannequin-devil's from 1.25 to 0.98 s with the branches of steps 8-14; the branches
+    beside the eigensolver, with the sampled searches' choice of brute force
+    (:class:`_Nearest`), took it to 0.89 s (0.99 s before, in the same interleaved runs).
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
@@ -1240,46 +1340,107 @@ def intrinsic_symmetry(
         polish_k = n - 1
         polish = polish_k > refine_k
     n_big = polish_k if polish else refine_k
-    big_evals, big = laplacian_eigen(v, f, n_big, generator=gen)  # (K,), (V', K)
+    weights = [spectral_weight]
+    if pairing_hypotheses and spectral_weight != 0.0:
+        weights.append(0.0)
+    # step 9's vertex sample, and the vertices its searches run among
+    top_k = polish_k if polish else refine_k
+    n_rows = min(n, max(select_samples, 4 * top_k))  # the least-squares fits have top_k unknowns per column
+    n_targets = max(search_vertices, 2 * n_rows)
+    ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
+    schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:] if polish else np.zeros(0, int)
+
+    def draw_sample(seed: int, graph, two_ring, wound: bool) -> tuple:
+        # the sample, from the seed of its generator, and the orientation test's frames on it
+        tic = time.perf_counter()
+        rng = np.random.default_rng(seed)
+        rows = np.sort(rng.choice(n, size=n_rows, replace=False))  # (S,)
+        targets = None
+        if n > search_vertices:
+            # a generator of its own, so that the draws below do not depend on search_vertices
+            targets = _even_subset(v, rows, n_targets, np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0]))
+        orient = OrientationTest(v, f, rows, two_ring) if wound else None
+        return seed, rng, rows, targets, orient, time.perf_counter() - tic
+
+    # the sample's seed is the generator's draw after the eigensolver's and the sign
+    # hypotheses' (one for each pairing with pairs, step 7), so it is known only after step
+    # 4. Each possible seed is read from a copy of the generator, and each one's sample
+    # drawn on the core that ARPACK (single-threaded) leaves idle; the true seed's is used
+    # (the same bits as drawn after step 4). Not the geodesic probe: scipy's Dijkstra holds
+    # the GIL, which ARPACK's Python loop needs at every step.
+    ahead = torch.Generator()
+    ahead.set_state(gen.get_state())
+    guesses = [draw_seed(ahead) for _ in range(2 + (len(weights) if sign_hypotheses else 0))][1:]
+
+    def eigen() -> tuple[np.ndarray, np.ndarray, float]:
+        tic = time.perf_counter()
+        return *laplacian_eigen(v, f, n_big, generator=gen), time.perf_counter() - tic  # (K,), (V', K)
+
+    def topology() -> tuple:
+        # what needs no eigenpair, beside the eigensolver
+        tic = time.perf_counter()
+        graph = edge_graph(v, f)
+        two_ring = ring_neighbourhood(f, n, rings=2)  # (V', V'), also step 12's neighbourhoods
+        area = mass_matrix(v, f).diagonal()  # (V',)
+        has_boundary = bool((edge_face_counts(f)[1] == 1).any())
+        wound = bool(refine_iters) and (refine_orientation > 0 or polish or realign) and consistently_wound(f)
+        t_topology = time.perf_counter() - tic
+        return graph, two_ring, area, has_boundary, wound, t_topology, [draw_sample(g, graph, two_ring, wound) for g in guesses]
+
+    (big_evals, big, t_eigen), (graph, two_ring, area, has_boundary, wound, t_topology, samples) = run_branches([eigen, topology])
     evals, evecs = np.maximum(big_evals[:n_eigen], 0.0), big[:, :n_eigen]  # (k,), (V', k)
     if not evals[1] > 1e-9:
         raise InputValueError("mesh: expected a connected surface, got a second Laplacian eigenvalue of 0")
-    timings["eigen"], tic = time.perf_counter() - tic, time.perf_counter()
+    timings["eigen"], tic = t_eigen, time.perf_counter()
 
     t_h = 4.0 * math.log(10.0) / evals[1]
     hks_th = heat_kernel_signature(evals, evecs, np.array([t_h]))[:, 0]  # (V',)
-    graph = edge_graph(v, f)
-    two_ring = ring_neighbourhood(f, n, rings=2)  # (V', V'), also step 12's neighbourhoods
     features = hks_feature_points(hks_th, two_ring)  # (d,)
     features = thin_points(graph, features, feature_radius)[:max_features]  # (d,)
     dense_desc = heat_kernel_signature(evals, evecs, hks_times(evals, n_times))  # (V', h)
     desc = dense_desc[features]  # (d, h)
-    timings["features"], tic = time.perf_counter() - tic, time.perf_counter()
+    timings["features"], tic = t_topology + time.perf_counter() - tic, time.perf_counter()
 
     tic = time.perf_counter()
     feat_dist = geodesic_distances(graph, features)[:, features]  # (d, d)
-    area = mass_matrix(v, f).diagonal()  # (V',)
-    t_shared = time.perf_counter() - tic  # counted with the pairs
-    weights = [spectral_weight]
-    if pairing_hypotheses and spectral_weight != 0.0:
-        weights.append(0.0)
-    for k_ in ("pairs", "signs", "correction", "map"):
+    pair_sets, pair_notes = [], []
+    for weight in weights:
+        pairs, _ = symmetric_pairs(
+            features, desc, evecs[features], distances=feat_dist, max_pairs=max_pairs, max_cost=max_pair_cost,
+            penalty=penalty, spectral_weight=weight,
+        )  # (P, 2)
+        pair_sets.append(pairs)
+        pair_notes.append(
+            ["no pair of feature points passed the affinity test: no symmetry found, the map is the identity"] if pairs.shape[0] == 0 else []
+        )
+    # the generator's draws, in the order of the serial method: each pairing's sign
+    # hypotheses (step 7), then step 9's sample; drawn here, the branches below need no generator
+    sign_rngs = [numpy_rng(gen) if sign_hypotheses and pairs.shape[0] else None for pairs in pair_sets]
+    seed = draw_seed(gen)
+    for k_ in ("signs", "correction", "map"):
         timings[k_] = 0.0
-    timings["pairs"] = t_shared
+    timings["pairs"], tic = time.perf_counter() - tic, time.perf_counter()
+
+    if n_rows > select_samples and n > select_samples:
+        notes.append(f"select_samples raised from {select_samples} to {n_rows}, 4 x {'polish_k' if polish else 'refine_k'}")
+    if n > search_vertices and n_targets > search_vertices:
+        notes.append(f"search_vertices raised from {search_vertices} to {n_targets}, twice the vertex sample")
+    sample = next((s for s in samples if s[0] == seed), None) or draw_sample(seed, graph, two_ring, wound)
+    _, rng, rows, targets, orient, t_sample = sample
+    trees = _Searches(big, targets)
+    seen: list[np.ndarray] = []
+    width = 3 if refine_k > n_eigen else 2
+    timings["select"] = t_sample + time.perf_counter() - tic
     candidates: list[_Candidate] = []
 
-    def pairings() -> None:
-        for weight in weights:
-            cand_notes: list[str] = []
-            tic = time.perf_counter()
-            pairs, _ = symmetric_pairs(
-                features, desc, evecs[features], distances=feat_dist, max_pairs=max_pairs, max_cost=max_pair_cost,
-                penalty=penalty, spectral_weight=weight,
-            )  # (P, 2)
-            if pairs.shape[0] == 0:
-                cand_notes.append("no pair of feature points passed the affinity test: no symmetry found, the map is the identity")
-            timings["pairs"], tic = timings["pairs"] + time.perf_counter() - tic, time.perf_counter()
+    def first_image(cand: _Candidate) -> np.ndarray:
+        # the hypothesis's map on the sample
+        return trees.to_vertices(_Nearest(trees.sample_points(cand.target)).query(cand.query[rows]))  # (S,)
 
+    def pairings() -> list[np.ndarray]:
+        # steps 5-7 for each pairing, and each map on the vertex sample
+        for pairs, cand_notes, sign_rng, weight in zip(pair_sets, pair_notes, sign_rngs, weights):
+            tic = time.perf_counter()
             signs, confidence = eigenfunction_signs(evecs, v, graph, pairs, cross_pairs=cross_pairs, min_confidence=min_confidence)  # (k,)
             signs[0] = 1.0  # the constant eigenfunction is even
             if not pairs.shape[0]:
@@ -1298,9 +1459,8 @@ def intrinsic_symmetry(
             timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
 
             emb = evecs @ rotation  # (V', k)
-            if sign_hypotheses and pairs.shape[0]:
-                rng = numpy_rng(gen)
-                signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, rng, points=v, max_points=search_vertices)
+            if sign_rng is not None:
+                signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, sign_rng, points=v, max_points=search_vertices)
                 if q_chosen < q_thesis:
                     cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
             use = signs != 0
@@ -1311,45 +1471,52 @@ def intrinsic_symmetry(
                 _Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
             )
             timings["map"] += time.perf_counter() - tic
+        tic = time.perf_counter()
+        images = [first_image(cand) for cand in candidates]
+        timings["select"] += time.perf_counter() - tic
+        return images
 
     def orientation_fmap() -> tuple[np.ndarray, float]:
         tic = time.perf_counter()
         return orientation_reversing_map(v, f, evals, evecs, area, dense_desc), time.perf_counter() - tic  # (k, k)
 
-    # the orientation hypothesis's map (numpy products) beside the pairing hypotheses, on a
-    # thread of its own: it shares nothing with them and draws nothing from the generator
-    branches = run_branches([pairings, orientation_fmap] if orientation_hypothesis else [pairings])
-    if orientation_hypothesis:
-        fmap, timings["orientation"] = branches[1]
-        candidates.append(
-            _Candidate("orientation", candidates[0].pairs, fmap, np.eye(n_eigen), True, evecs @ fmap.T, evecs, True, [])
-        )
+    def probe_and_searches() -> tuple[GeodesicProbe, float]:
+        # step 9's geodesic probe (Dijkstra's searches; the probe draws from the sample's
+        # generator, which nothing else draws from until step 14), the searches of the
+        # sampled rounds (steps 11, 13) and step 13's tree of every vertex, built before the
+        # threads share them
+        tic = time.perf_counter()
+        probe = GeodesicProbe(graph, rows, rng)
+        for kk in (*ks, *schedule):
+            trees.sample(kk)
+        if polish:
+            trees.dense(polish_k)
+        return probe, time.perf_counter() - tic
 
-    # choose a hypothesis on a vertex sample: each one's map, refined by sampled ZoomOut,
+    def orientation_branch() -> tuple[_Candidate, float, GeodesicProbe, float, np.ndarray]:
+        fmap, t_fmap = orientation_fmap()
+        # its pairs (the thesis's, reported with this map) are set once the pairings are done
+        cand = _Candidate("orientation", np.zeros((0, 2), np.int64), fmap, np.eye(n_eigen), True, evecs @ fmap.T, evecs, True, [])
+        probe, t_probe = probe_and_searches()
+        tic = time.perf_counter()
+        image = first_image(cand)
+        return cand, t_fmap, probe, t_probe + time.perf_counter() - tic, image
+
+    # on two threads, sharing nothing mutable and drawing nothing from the generator: the
+    # pairing hypotheses (steps 5-7, mostly Python and small products), and the orientation
+    # hypothesis's map (step 8, numpy products) with step 9's probe and the later searches
+    if orientation_hypothesis:
+        images, (cand, timings["orientation"], probe, t_probe, image) = run_branches([pairings, orientation_branch])
+        cand.pairs = candidates[0].pairs
+        candidates.append(cand)
+        images.append(image)
+    else:
+        images, (probe, t_probe) = run_branches([pairings, probe_and_searches])
+    timings["select"] += t_probe
+
+    # choose a hypothesis on the vertex sample: each one's map, refined by sampled ZoomOut,
     # scored by three tests of an isometric involution
     tic = time.perf_counter()
-    rng = numpy_rng(gen)
-    top_k = polish_k if polish else refine_k
-    n_rows = max(select_samples, 4 * top_k)  # the least-squares fits have top_k unknowns per column
-    if n_rows > select_samples and n > select_samples:
-        notes.append(f"select_samples raised from {select_samples} to {min(n, n_rows)}, 4 x {'polish_k' if polish else 'refine_k'}")
-    rows = np.sort(rng.choice(n, size=min(n, n_rows), replace=False))  # (S,)
-    ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
-    targets = None
-    if n > search_vertices:
-        n_targets = max(search_vertices, 2 * rows.size)
-        if n_targets > search_vertices:
-            notes.append(f"search_vertices raised from {search_vertices} to {n_targets}, twice the vertex sample")
-        # a generator of its own, so that the draws below do not depend on search_vertices
-        targets = _even_subset(v, rows, n_targets, np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0]))
-    trees = _Searches(big, targets)
-    seen: list[np.ndarray] = []
-    width = 3 if refine_k > n_eigen else 2
-
-    def first_image(cand: _Candidate) -> np.ndarray:
-        # the hypothesis's map on the sample
-        cand.tree = _kdtree(trees.sample_points(cand.target))
-        return trees.to_vertices(cand.tree.query(cand.query[rows], k=1, workers=-1)[1])  # (S,)
 
     def screen(cand: _Candidate, image: np.ndarray | None = None) -> np.ndarray | None:
         # the hypothesis's map on the sample; None when it is not worth refining
@@ -1380,21 +1547,14 @@ def intrinsic_symmetry(
     def score(cand: _Candidate) -> np.ndarray:
         return refine_score(cand, screen(cand))
 
-    def sample_images() -> list[np.ndarray]:
-        for kk in ks:
-            trees.nearest(kk, big[rows[:1], :kk])  # the sample's trees, built before the threads share them
-        return [first_image(cand) for cand in candidates]
-
-    # the probe's Dijkstra searches (holding the GIL) beside the kd-trees' builds and searches
-    probe, images = run_branches([partial(GeodesicProbe, graph, rows, rng), sample_images])
     # screened in order (a duplicate of an earlier map is skipped), then refined on threads:
     # each refinement touches only its own hypothesis
     screened = [screen(cand, image) for cand, image in zip(candidates, images)]
     scores = run_branches([partial(refine_score, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
-    limit = max_distortion_open if bool((edge_face_counts(f)[1] == 1).any()) else max_distortion
+    limit = max_distortion_open if has_boundary else max_distortion
     best = _rank_choice(table, limit)
-    timings["select"] = time.perf_counter() - tic
+    timings["select"] += time.perf_counter() - tic
     extrinsic_note = None
     if extrinsic_hypothesis and (not np.isfinite(table[best]).all() or table[best, 0] > _WEAK_DEFECT):
         # the chosen intrinsic map is weak: try the mirror plane of the vertices
@@ -1473,9 +1633,8 @@ def intrinsic_symmetry(
 
     def reversed_share(vertex_map: np.ndarray) -> float:
         # share of the sampled vertices around which the map reverses the orientation
-        return float(np.mean(orientation_reversal(v, f, vertex_map, rows, neighbourhood=two_ring) < 0))
+        return float(np.mean(orient(vertex_map) < 0))
 
-    wound = bool(refine_iters) and (refine_orientation > 0 or polish or realign) and consistently_wound(f)
     vmap_share = None  # reversed_share(vmap) once known
     check_orientation = bool(refine_iters) and refine_orientation > 0 and (chosen.refined is not None or chosen.usable)
     if check_orientation and refine_k > _ORIENTATION_MAX_K:
@@ -1541,7 +1700,6 @@ def intrinsic_symmetry(
     if polish and (chosen.refined is not None or rescued):
         # step 13: ZoomOut on into a larger basis, kept unless it lowers the orientation reversal
         tic = time.perf_counter()
-        schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:]
         image, fitted = _sampled_zoomout(big, area, rows, vmap[rows], schedule, trees, refine_involution)
         trial = trees.map_every_vertex(fitted)
         if wound:

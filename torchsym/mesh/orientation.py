@@ -45,6 +45,7 @@ __all__ = [
     "descriptor_operators",
     "functional_to_pointwise",
     "orientation_operators",
+    "OrientationTest",
     "orientation_reversal",
     "orientation_reversing_map",
     "reduce_descriptors",
@@ -343,37 +344,61 @@ def orientation_reversal(
         raise InputValueError(f"rows: expected vertex indices in [0, {n}), got {rows.min()}..{rows.max()}")
     if isinstance(rings, bool) or not isinstance(rings, (int, np.integer)) or rings < 1:
         raise InputValueError(f"rings: expected an integer >= 1, got {rings!r}")
-    missing = vmap < 0
-    vmap = np.where(missing, 0, vmap)  # placeholders; their rows are zeroed below
-    face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
-    normal = np.zeros_like(v)
-    for c in range(3):
-        np.add.at(normal, faces[:, c], face_normal)
-    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), np.finfo(float).tiny)
-    # a right-handed tangent frame (e1, e2, n) at every vertex
-    helper = np.where(np.abs(normal[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
-    e1 = np.cross(normal, helper)
-    e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
-    e2 = np.cross(normal, e1)
     if neighbourhood is None:
         neighbourhood = ring_neighbourhood(faces, n, rings=rings)
     elif getattr(neighbourhood, "shape", None) != (n, n):
         raise InputShapeError(f"neighbourhood: expected a ({n}, {n}) sparse matrix, got {getattr(neighbourhood, 'shape', None)}")
-    reach = neighbourhood.tocsr()[rows].tocoo()  # (R, V)
-    centre, nbr = rows[reach.row], reach.col  # one entry per (row, neighbour)
-    off = v[nbr] - v[centre]  # (E, 3)
-    img = v[vmap[nbr]] - v[vmap[centre]]  # (E, 3)
-    p = np.stack([(off * e1[centre]).sum(1), (off * e2[centre]).sum(1)], axis=1)  # (E, 2)
-    q = np.stack([(img * e1[vmap[centre]]).sum(1), (img * e2[vmap[centre]]).sum(1)], axis=1)  # (E, 2)
-    outer = (p[:, :, None] * q[:, None, :]).reshape(-1, 4)  # (E, 4)
-    m = np.zeros((rows.size, 4))
-    np.add.at(m, reach.row, outer)
-    out = np.sign(m[:, 0] * m[:, 3] - m[:, 1] * m[:, 2]).astype(np.int64)
-    if missing.any():
-        bad = missing[rows].copy()
-        np.logical_or.at(bad, reach.row, missing[nbr])
-        out[bad] = 0
-    return out
+    return OrientationTest(v, faces, rows, neighbourhood)(vmap)
+
+
+class OrientationTest:
+    """:func:`orientation_reversal` for many maps of one mesh: the frames and neighbourhoods computed once.
+
+    Args (taken as given, unchecked; :func:`orientation_reversal` checks them):
+        vertices: ``(V, 3)`` float64 positions.
+        faces: ``(F, 3)`` int64 consistently wound triangles.
+        rows: ``(R,)`` int64 vertices to test.
+        neighbourhood: the ``(V, V)`` CSR of :func:`~torchsym.mesh.operators.ring_neighbourhood`.
+
+    Calling it with a map ``(V,)`` int64 (-1: no image) gives what
+    :func:`orientation_reversal` gives for that map, the same bits.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, rows: np.ndarray, neighbourhood):
+        v = vertices
+        face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
+        normal = np.zeros_like(v)
+        for c in range(3):
+            np.add.at(normal, faces[:, c], face_normal)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), np.finfo(float).tiny)
+        # a right-handed tangent frame (e1, e2, n) at every vertex
+        helper = np.where(np.abs(normal[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+        e1 = np.cross(normal, helper)
+        e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
+        e2 = np.cross(normal, e1)
+        reach = neighbourhood.tocsr()[rows].tocoo()  # (R, V)
+        self.centre, self.nbr = rows[reach.row], reach.col  # one entry per (row, neighbour)
+        off = v[self.nbr] - v[self.centre]  # (E, 3)
+        self.p = np.stack([(off * e1[self.centre]).sum(1), (off * e2[self.centre]).sum(1)], axis=1)  # (E, 2)
+        self.v, self.e1, self.e2, self.rows, self.entry_row = v, e1, e2, rows, reach.row
+
+    def __call__(self, vertex_map: np.ndarray) -> np.ndarray:
+        """``(R,)`` int64 in {-1, 0, 1} for the map ``vertex_map (V,)``."""
+        v, centre, nbr, rows = self.v, self.centre, self.nbr, self.rows
+        missing = vertex_map < 0
+        vmap = np.where(missing, 0, vertex_map)  # placeholders; their rows are zeroed below
+        img = v[vmap[nbr]] - v[vmap[centre]]  # (E, 3)
+        at = vmap[centre]
+        q = np.stack([(img * self.e1[at]).sum(1), (img * self.e2[at]).sum(1)], axis=1)  # (E, 2)
+        outer = (self.p[:, :, None] * q[:, None, :]).reshape(-1, 4)  # (E, 4)
+        m = np.zeros((rows.size, 4))
+        np.add.at(m, self.entry_row, outer)
+        out = np.sign(m[:, 0] * m[:, 3] - m[:, 1] * m[:, 2]).astype(np.int64)
+        if missing.any():
+            bad = missing[rows].copy()
+            np.logical_or.at(bad, self.entry_row, missing[nbr])
+            out[bad] = 0
+        return out
 
 
 def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
