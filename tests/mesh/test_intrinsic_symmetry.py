@@ -102,9 +102,9 @@ class TestIntrinsicSymmetry:
         assert torch.equal(a.functional_map, b.functional_map) and torch.equal(a.pairs, b.pairs)
 
     def test_branches_on_threads_give_the_serial_result(self, blob, monkeypatch):
-        # steps 8, 9, 11, 12 and 14 run independent branches on threads (run_branches): the
-        # result must be bit for bit the one of the branches run one after another
-        from torchsym.core.parallel import run_branches
+        # steps 2, 8, 9, 11, 12 and 14 run independent branches on threads (run_branches,
+        # run_later): the result must be bit for bit the one of the branches run one after another
+        from torchsym.core.parallel import run_branches, run_later
         from torchsym.mesh import intrinsic
 
         mesh, _ = blob
@@ -115,6 +115,7 @@ class TestIntrinsicSymmetry:
         threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert len(sizes) >= 4 and max(sizes) >= 2  # steps 8, 9 (twice), 11 and 14 at least
         monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: run_branches(tasks, 1))
+        monkeypatch.setattr(intrinsic, "run_later", lambda task: run_later(task, threaded=False))
         serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert any(n.startswith("realigned by ") for n in threaded.notes)
         assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)

@@ -34,7 +34,7 @@ from threadpoolctl import threadpool_limits
 from torch import nn
 
 from torchsym.core.checks import check_in_range, check_int, check_positive
-from torchsym.core.parallel import run_branches
+from torchsym.core.parallel import run_branches, run_later
 from torchsym.core.random import draw_seed, make_generator, numpy_rng, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result, on_input_device
@@ -454,13 +454,17 @@ class _Searches:
         index = np.asarray(index, dtype=np.int64)
         return index if self.targets is None else self.targets[index]
 
-    def map_every_vertex(self, fmap: np.ndarray) -> np.ndarray:
+    def map_every_vertex(self, fmap: np.ndarray, which: np.ndarray | None = None) -> np.ndarray:
         """The point map of ``fmap (kk, kk)``: each vertex to the vertex whose row of ``Phi`` is nearest its row of ``Phi C``.
 
-        Approximate (``eps = _DENSE_EPS``): each image at most ``1 + eps`` times as far as the nearest row.
+        Approximate (``eps = _DENSE_EPS``): each image at most ``1 + eps`` times as far as
+        the nearest row. With ``which`` (vertex indices), only those vertices' images, the
+        same as those of the whole map (each search is its own).
         """
         kk = fmap.shape[0]
-        queries = self.big[:, :kk] @ fmap  # (V, kk)
+        queries = self.big[:, :kk] @ fmap  # (V, kk), for every vertex: a product of a subset may round otherwise
+        if which is not None:
+            queries = queries[which]
         return self.dense(kk).query(queries, k=1, eps=_DENSE_EPS, workers=-1)[1].astype(np.int64)
 
     def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
@@ -1613,22 +1617,34 @@ def intrinsic_symmetry(
         dense_tree = _kdtree(chosen.target, balanced=False)
         return dense_tree.query(chosen.query, k=1, eps=eps, workers=-1)[1].astype(np.int64), time.perf_counter() - tic  # (V',)
 
-    def refined_map() -> tuple[np.ndarray, float]:
-        tic = time.perf_counter()
-        return trees.map_every_vertex(chosen.refined), time.perf_counter() - tic  # (V',)
-
-    # step 11's map of every vertex beside the thesis's (both searches, on threads)
     refined = bool(refine_iters) and chosen.refined is not None
-    maps = run_branches([thesis_map, refined_map] if refined else [thesis_map])
-    coarse_map, t_map = maps[0]
-    vmap = coarse_map
-    timings["map"] += t_map
     full = np.zeros((0, 0))
+    pending = None
     if refine_iters:
         timings["refine"] = 0.0
     if refined:
+        # steps 12-14 read step 11's map of every vertex only on the sample (ZoomOut's start)
+        # and its 2-rings (the orientation test): the map there first. The rest of it, needed
+        # only where no later step replaces the map, and the thesis's map (reported) are
+        # searched on a thread of their own meanwhile.
         full = chosen.refined  # (k_r, k_r), fitted on the sample
-        vmap, timings["refine"] = maps[1]
+        read = np.union1d(rows, two_ring[rows].indices)  # (U,)
+        rest = np.setdiff1d(np.arange(n), read)
+        vmap = np.full(n, -1, dtype=np.int64)
+        vmap[read] = trees.map_every_vertex(full, read)
+        step11 = vmap
+        timings["refine"] = time.perf_counter() - tic
+
+        def later() -> tuple[np.ndarray, float, np.ndarray, float]:
+            coarse, t_coarse = thesis_map()
+            tic = time.perf_counter()
+            return coarse, t_coarse, trees.map_every_vertex(full, rest), time.perf_counter() - tic
+
+        pending = run_later(later)
+    else:
+        coarse_map, t_map = thesis_map()
+        vmap = coarse_map
+        timings["map"] += t_map
     rescued = False
 
     def reversed_share(vertex_map: np.ndarray) -> float:
@@ -1764,6 +1780,12 @@ def intrinsic_symmetry(
             "in place, or distorted geodesics by more than the limit): the thesis's map is "
             "returned unrefined and is unreliable"
         )
+    if pending is not None:
+        coarse_map, t_map, rest_map, t_rest = pending.result()
+        timings["map"] += t_map
+        timings["refine"] += t_rest
+        if vmap is step11:  # no later step replaced step 11's map: the rest of it
+            vmap[rest] = rest_map
     pairs, fmap, rotation, converged = chosen.pairs, chosen.fmap, chosen.rotation, chosen.converged
     hypothesis = chosen.name
 
