@@ -209,6 +209,11 @@ def map_consistency(tree: cKDTree, emb: np.ndarray, signs: np.ndarray, rows: np.
     several times faster in ``k`` dimensions where wrong signs put queries far from the data.
     """
     _, target = tree.query(emb[rows] * signs, k=1, eps=approx, workers=-1)
+    return _consistency(emb, signs, rows, target)
+
+
+def _consistency(emb: np.ndarray, signs: np.ndarray, rows: np.ndarray, target: np.ndarray) -> float:
+    """:func:`map_consistency` of the map that sends ``rows`` to ``target``."""
     fitted = np.linalg.lstsq(emb[rows], emb[target], rcond=None)[0]  # (k, k)
     return float(np.linalg.norm(fitted - np.diag(signs)))
 
@@ -848,7 +853,8 @@ def _sign_hypotheses(
         keep = _even_subset(points, rows, max_points, rng)
         sub_emb, rows = sub_emb[keep], np.searchsorted(keep, rows)
     tree = cKDTree(sub_emb)  # default leaves: its searches are approximate (eps), so the leaf size would change them
-    base = map_consistency(tree, sub_emb, signs[cols], rows)
+    # the thesis's signs' exact map: on the tree, or by brute force where it lies far from the rows
+    base = _consistency(sub_emb, signs[cols], rows, _Nearest(sub_emb, tree=tree).query(sub_emb[rows] * signs[cols]))
     if base < accept:
         return signs, base, base
     base = map_consistency(tree, sub_emb, signs[cols], rows, approx=1.0)  # compared like with like
