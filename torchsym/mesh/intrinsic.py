@@ -35,7 +35,7 @@ from torch import nn
 
 from torchsym.core.checks import check_in_range, check_int, check_positive
 from torchsym.core.parallel import run_branches, run_later
-from torchsym.core.random import draw_seed, make_generator, numpy_rng, random_subset
+from torchsym.core.random import draw_seed, make_generator, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result, on_input_device
 from torchsym.errors import InputValueError
@@ -820,13 +820,22 @@ def _rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
     return best if best == 0 or distortion[best] < min(max_distortion, distortion[0]) else 0
 
 
+def _sign_sample(
+    n: int, rng: np.random.Generator, points: np.ndarray | None, max_points: int
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`_sign_hypotheses`'s 800 sorted vertices, and the even subset holding them that the images are sought among (None: all)."""
+    rows = np.sort(rng.choice(n, size=min(n, 800), replace=False))
+    keep = _even_subset(points, rows, max_points, rng) if points is not None and n > max_points else None
+    return rows, keep
+
+
 def _sign_hypotheses(
     emb: np.ndarray,
     signs: np.ndarray,
     confidence: np.ndarray,
     n_flip: int,
     margin: float,
-    rng: np.random.Generator,
+    rng: np.random.Generator | tuple[np.ndarray, np.ndarray | None],
     accept: float = 0.1,
     points: np.ndarray | None = None,
     max_points: int = 6000,
@@ -840,17 +849,16 @@ def _sign_hypotheses(
     vector whose consistency is below ``margin`` times theirs. With ``points`` (the unit-area
     vertices) on more than ``max_points`` vertices, the images are sought among
     ``max_points`` of them (:func:`_even_subset`, as ``search_vertices`` of
-    :func:`intrinsic_symmetry`).
+    :func:`intrinsic_symmetry`). ``rng``: the generator of the vertex sample, or the sample
+    it gives (:func:`_sign_sample`), drawn ahead.
     """
     use = np.nonzero(signs != 0)[0]
     use = use[use != 0]  # the constant eigenfunction is always even
     flip = use[np.argsort(np.abs(confidence[use]), kind="stable")[:n_flip]]
     cols = signs != 0
     sub_emb = emb[:, cols]
-    n = emb.shape[0]
-    rows = np.sort(rng.choice(n, size=min(n, 800), replace=False))
-    if points is not None and n > max_points:  # the images among an even subset that holds the rows
-        keep = _even_subset(points, rows, max_points, rng)
+    rows, keep = _sign_sample(emb.shape[0], rng, points, max_points) if isinstance(rng, np.random.Generator) else rng
+    if keep is not None:  # the images among an even subset that holds the rows
         sub_emb, rows = sub_emb[keep], np.searchsorted(keep, rows)
     tree = cKDTree(sub_emb)  # default leaves: its searches are approximate (eps), so the leaf size would change them
     # the thesis's signs' exact map: on the tree, or by brute force where it lies far from the rows
@@ -1381,6 +1389,9 @@ def intrinsic_symmetry(
     ahead = torch.Generator()
     ahead.set_state(gen.get_state())
     guesses = [draw_seed(ahead) for _ in range(2 + (len(weights) if sign_hypotheses else 0))][1:]
+    # the same for the sign hypotheses' samples (step 7): pairing i draws the seed after the
+    # eigensolver's and the earlier pairings' with pairs
+    sign_guesses = guesses[: len(weights)] if sign_hypotheses else []
 
     def eigen() -> tuple[np.ndarray, np.ndarray, float]:
         tic = time.perf_counter()
@@ -1395,9 +1406,13 @@ def intrinsic_symmetry(
         has_boundary = bool((edge_face_counts(f)[1] == 1).any())
         wound = bool(refine_iters) and (refine_orientation > 0 or polish or realign) and consistently_wound(f)
         t_topology = time.perf_counter() - tic
-        return graph, two_ring, area, has_boundary, wound, t_topology, [draw_sample(g, graph, two_ring, wound) for g in guesses]
+        samples = [draw_sample(g, graph, two_ring, wound) for g in guesses]
+        sign_samples = {g: _sign_sample(n, np.random.default_rng(g), v, search_vertices) for g in sign_guesses}
+        return graph, two_ring, area, has_boundary, wound, t_topology, samples, sign_samples
 
-    (big_evals, big, t_eigen), (graph, two_ring, area, has_boundary, wound, t_topology, samples) = run_branches([eigen, topology])
+    (big_evals, big, t_eigen), (graph, two_ring, area, has_boundary, wound, t_topology, samples, sign_samples) = run_branches(
+        [eigen, topology]
+    )
     evals, evecs = np.maximum(big_evals[:n_eigen], 0.0), big[:, :n_eigen]  # (k,), (V', k)
     if not evals[1] > 1e-9:
         raise InputValueError("mesh: expected a connected surface, got a second Laplacian eigenvalue of 0")
@@ -1425,7 +1440,11 @@ def intrinsic_symmetry(
         )
     # the generator's draws, in the order of the serial method: each pairing's sign
     # hypotheses (step 7), then step 9's sample; drawn here, the branches below need no generator
-    sign_rngs = [numpy_rng(gen) if sign_hypotheses and pairs.shape[0] else None for pairs in pair_sets]
+    sign_seeds = [draw_seed(gen) if sign_hypotheses and pairs.shape[0] else None for pairs in pair_sets]
+    sign_draws = [
+        None if seed is None else sign_samples.get(seed) or _sign_sample(n, np.random.default_rng(seed), v, search_vertices)
+        for seed in sign_seeds
+    ]
     seed = draw_seed(gen)
     for k_ in ("signs", "correction", "map"):
         timings[k_] = 0.0
@@ -1449,7 +1468,7 @@ def intrinsic_symmetry(
 
     def pairings() -> list[np.ndarray]:
         # steps 5-7 for each pairing, and each map on the vertex sample
-        for pairs, cand_notes, sign_rng, weight in zip(pair_sets, pair_notes, sign_rngs, weights):
+        for pairs, cand_notes, sign_draw, weight in zip(pair_sets, pair_notes, sign_draws, weights):
             tic = time.perf_counter()
             signs, confidence = eigenfunction_signs(evecs, v, graph, pairs, cross_pairs=cross_pairs, min_confidence=min_confidence)  # (k,)
             signs[0] = 1.0  # the constant eigenfunction is even
@@ -1469,8 +1488,8 @@ def intrinsic_symmetry(
             timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
 
             emb = evecs @ rotation  # (V', k)
-            if sign_rng is not None:
-                signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, sign_rng, points=v, max_points=search_vertices)
+            if sign_draw is not None:
+                signs, q_thesis, q_chosen = _sign_hypotheses(emb, signs, confidence, sign_hypotheses, 0.6, sign_draw, points=v, max_points=search_vertices)
                 if q_chosen < q_thesis:
                     cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
             use = signs != 0
@@ -1630,23 +1649,18 @@ def intrinsic_symmetry(
         timings["refine"] = 0.0
     if refined:
         # steps 12-14 read step 11's map of every vertex only on the sample (ZoomOut's start)
-        # and its 2-rings (the orientation test): the map there first. The rest of it, needed
-        # only where no later step replaces the map, and the thesis's map (reported) are
-        # searched on a thread of their own meanwhile.
+        # and its 2-rings (the orientation test): the map there first, and the rest of it
+        # only if no later step replaces the map. The thesis's map (reported) is searched on
+        # a thread of its own meanwhile.
         full = chosen.refined  # (k_r, k_r), fitted on the sample
         read = np.union1d(rows, two_ring[rows].indices)  # (U,)
         rest = np.setdiff1d(np.arange(n), read)
         vmap = np.full(n, -1, dtype=np.int64)
         vmap[read] = trees.map_every_vertex(full, read)
-        step11 = vmap
+        step11, step11_fmap = vmap, full
         timings["refine"] = time.perf_counter() - tic
 
-        def later() -> tuple[np.ndarray, float, np.ndarray, float]:
-            coarse, t_coarse = thesis_map()
-            tic = time.perf_counter()
-            return coarse, t_coarse, trees.map_every_vertex(full, rest), time.perf_counter() - tic
-
-        pending = run_later(later)
+        pending = run_later(thesis_map)
     else:
         coarse_map, t_map = thesis_map()
         vmap = coarse_map
@@ -1787,11 +1801,12 @@ def intrinsic_symmetry(
             "returned unrefined and is unreliable"
         )
     if pending is not None:
-        coarse_map, t_map, rest_map, t_rest = pending.result()
+        coarse_map, t_map = pending.result()
         timings["map"] += t_map
-        timings["refine"] += t_rest
         if vmap is step11:  # no later step replaced step 11's map: the rest of it
-            vmap[rest] = rest_map
+            tic = time.perf_counter()
+            vmap[rest] = trees.map_every_vertex(step11_fmap, rest)
+            timings["refine"] += time.perf_counter() - tic
     pairs, fmap, rotation, converged = chosen.pairs, chosen.fmap, chosen.rotation, chosen.converged
     hypothesis = chosen.name
 
