@@ -1,11 +1,11 @@
-"""run_branches: results in the order given, errors raised, a serial path; run_later: a branch waited for later."""
+"""run_branches: results in the order given, errors raised, a serial path."""
 
 import threading
 import time
 
 import pytest
 
-from torchsym.core.parallel import run_branches, run_later
+from torchsym.core.parallel import run_branches
 
 
 def test_results_keep_the_order_given_whatever_finishes_first():
@@ -56,27 +56,3 @@ def test_the_first_error_in_the_order_given_is_raised_after_every_task_ended():
 
 def test_no_tasks():
     assert run_branches([]) == []
-
-
-def test_run_later_runs_beside_the_caller_and_returns_its_result():
-    barrier = threading.Barrier(2, timeout=5)  # the caller and the task must run at once
-
-    def task():
-        barrier.wait()
-        return threading.get_ident()
-
-    later = run_later(task, threaded=True)
-    barrier.wait()
-    assert later.result() != threading.get_ident()
-    assert run_later(threading.get_ident, threaded=False).result() == threading.get_ident()
-
-
-def test_run_later_raises_the_task_error_on_result():
-    def fails():
-        raise KeyError("a")
-
-    later = run_later(fails, threaded=True)
-    with pytest.raises(KeyError):
-        later.result()
-    with pytest.raises(KeyError):
-        run_later(fails, threaded=False)

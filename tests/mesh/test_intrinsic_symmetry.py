@@ -102,9 +102,9 @@ class TestIntrinsicSymmetry:
         assert torch.equal(a.functional_map, b.functional_map) and torch.equal(a.pairs, b.pairs)
 
     def test_branches_on_threads_give_the_serial_result(self, blob, monkeypatch):
-        # steps 2, 8, 9, 11, 12 and 14 run independent branches on threads (run_branches,
-        # run_later): the result must be bit for bit the one of the branches run one after another
-        from torchsym.core.parallel import run_branches, run_later
+        # steps 2, 8, 9, 12 and 14 run independent branches on threads (run_branches): the
+        # result must be bit for bit the one of the branches run one after another
+        from torchsym.core.parallel import run_branches
         from torchsym.mesh import intrinsic
 
         mesh, _ = blob
@@ -115,7 +115,6 @@ class TestIntrinsicSymmetry:
         threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert len(sizes) >= 4 and max(sizes) >= 2  # steps 8, 9 (twice), 11 and 14 at least
         monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: run_branches(tasks, 1))
-        monkeypatch.setattr(intrinsic, "run_later", lambda task: run_later(task, threaded=False))
         serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert any(n.startswith("realigned by ") for n in threaded.notes)
         assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)
@@ -405,6 +404,20 @@ class TestVertexSubsample:
         # at least twice the sample is searched, with a note
         raised = intrinsic_symmetry(mesh, select_samples=160, search_vertices=200, extrinsic_hypothesis=False)
         assert 200 < sizes[2] <= 320 and "search_vertices raised from 200 to 320, twice the vertex sample" in raised.notes
+
+    def test_map_before_refine_is_searched_when_first_read(self, blob):
+        from torchsym.mesh.intrinsic import _Deferred
+
+        mesh, _ = blob
+        result = intrinsic_symmetry(mesh)
+        assert isinstance(object.__getattribute__(result, "map_before_refine"), _Deferred)
+        first = result.map_before_refine
+        assert first.dtype == torch.int64 and first.shape == result.map.shape
+        assert result.map_before_refine is first  # searched once
+        assert result.to_dict()["map_before_refine"] == first.tolist()
+        assert torch.equal(result.to("cpu").map_before_refine, first)
+        unrefined = intrinsic_symmetry(mesh, refine_iters=0)  # there it is the result, searched in the call
+        assert isinstance(object.__getattribute__(unrefined, "map_before_refine"), torch.Tensor)
 
     def test_map_before_refine_is_a_near_nearest_map(self, solved):
         # when ZoomOut's map replaces it, the thesis's dense map comes from an approximate

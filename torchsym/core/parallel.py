@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Generic, TypeVar
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
 
-__all__ = ["Later", "run_branches", "run_later"]
+__all__ = ["run_branches"]
 
 T = TypeVar("T")
 
@@ -35,32 +35,3 @@ def run_branches(tasks: Sequence[Callable[[], T]], max_workers: int | None = Non
     with ThreadPoolExecutor(max_workers=workers) as pool:
         futures = [pool.submit(task) for task in tasks]
     return [future.result() for future in futures]
-
-
-class Later(Generic[T]):
-    """A task started on a thread of its own (:func:`run_later`); :meth:`result` waits for it."""
-
-    def __init__(self, task: Callable[[], T], threaded: bool):
-        self._future: Future | None = None
-        self._value: T | None = None
-        if threaded:
-            pool = ThreadPoolExecutor(max_workers=1)
-            self._future = pool.submit(task)
-            pool.shutdown(wait=False)  # the thread ends with the task
-        else:
-            self._value = task()
-
-    def result(self) -> T:
-        """The task's return value (its exception is raised here)."""
-        return self._future.result() if self._future is not None else self._value
-
-
-def run_later(task: Callable[[], T], threaded: bool | None = None) -> Later[T]:
-    """Start ``task`` (a callable without arguments) on a thread beside the caller's work; ``.result()`` waits for it.
-
-    For a branch whose result is needed only later, while the caller goes on with work
-    that shares no mutable state with it (as :func:`run_branches`). ``threaded``: default
-    when the machine has more than one core; False runs the task now, on the calling thread.
-    """
-    threaded = (os.cpu_count() or 1) > 1 if threaded is None else bool(threaded)
-    return Later(task, threaded)
