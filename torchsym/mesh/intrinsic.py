@@ -17,6 +17,7 @@ over a region is realigned by distances to anchors (step 14).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 import math
@@ -101,8 +102,16 @@ def symmetry_colors(vertices: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
     return rgb
 
 
+def _same(value: Any) -> Any:
+    return value
+
+
 class _Deferred:
-    """A value computed on first use (once, whichever thread asks first), then kept."""
+    """A value computed on first use (once, whichever thread asks first), then kept.
+
+    Pickled and deep-copied as its value (computed then), so a result that holds one
+    pickles and copies as a plain one.
+    """
 
     def __init__(self, compute):
         self._compute, self._value, self._lock = compute, None, threading.Lock()
@@ -112,6 +121,12 @@ class _Deferred:
             if self._compute is not None:
                 self._value, self._compute = self._compute(), None
             return self._value
+
+    def __reduce__(self) -> tuple:
+        return _same, (self.value(),)
+
+    def __deepcopy__(self, memo: dict) -> Any:
+        return copy.deepcopy(self.value(), memo)
 
     def __repr__(self) -> str:
         return "<searched when first read>" if self._compute is not None else repr(self._value)
@@ -141,11 +156,12 @@ class IntrinsicSymmetryResult(Result):
             space for the extrinsic hypothesis). On the benchmark's twisted 12,900-vertex
             mannequin-devil that search returned the nearest row for 89 % of the vertices,
             1.0008 times as far on average, in 0.06 s against 0.30 s. There it is
-            searched when first read (a :class:`_Deferred` until then, resolved by
-            attribute access, :meth:`to_dict` and :meth:`to`), outside the solver's
-            ``timings``: a caller who reads only ``map`` does not pay for it. Where it is
-            the result (``refine_iters = 0``, or no hypothesis could be refined) the search
-            is exact and runs in the call.
+            searched when first read, outside the solver's ``timings`` (any read: the
+            attribute, ``repr``, ``==``, :meth:`to_dict`, :meth:`to`, pickling or copying;
+            on a GPU input the result's move to the device reads it inside the call): a
+            caller who reads only ``map`` does not pay for it. Where it is the result
+            (``refine_iters = 0``, or no hypothesis could be refined) the search is exact
+            and runs in the call.
         refined_functional_map: ``(k_r, k_r)`` the functional map of the last ZoomOut
             round in the first ``k_r`` Laplace-Beltrami eigenfunctions ``Phi`` (``polish_k``
             when step 13's polished map was kept, else ``refine_k``)
@@ -200,7 +216,10 @@ class IntrinsicSymmetryResult(Result):
 
     def __getattribute__(self, name: str) -> Any:
         value = object.__getattribute__(self, name)
-        return value.value() if name == "map_before_refine" and isinstance(value, _Deferred) else value
+        if name == "map_before_refine" and isinstance(value, _Deferred):
+            value = value.value()
+            object.__setattr__(self, name, value)  # a plain tensor from now on
+        return value
 
     def write_artifacts(self, data: Any, out_dir: Path, stem: str) -> list[Path]:
         """Write ``{stem}_symmetry.ply`` (symmetric vertices share a colour) and ``{stem}_map.npy``."""
@@ -355,7 +374,7 @@ _BRUTE_BEYOND = 3.0  # _Nearest: brute force when the queries' nearest points li
 
 
 class _Nearest:
-    """Exact nearest rows of ``points (N, D)``: by a kd-tree, or by brute force when the queries lie far from the points.
+    """Nearest rows of ``points (N, D)``: by an exact kd-tree search, or by brute force when the queries lie far from the points.
 
     The sampled rounds of steps 9-13 search ``N`` of about 1,000-6,000 rows for 1,000
     queries. A kd-tree answers a query near its nearest point quickly, but the queries of a
@@ -449,8 +468,8 @@ class _Searches:
     """Nearest rows of the eigenfunction embedding ``big[:, :kk]``, each search structure built once per ``kk``.
 
     :meth:`dense` is the kd-tree over every vertex, for the maps of every vertex. :meth:`nearest`
-    answers the sampled rounds (ZoomOut on the vertex sample, steps 9-13) by brute force
-    (:class:`_Nearest`) among ``targets`` only (sorted vertex indices holding the sample,
+    answers the sampled rounds (ZoomOut on the vertex sample, steps 9-13) by :class:`_Nearest`
+    among ``targets`` only (sorted vertex indices holding the sample,
     :func:`_even_subset`; None: every vertex), as ZoomOut on a vertex subsample does
     (pyFM's ``subsample``): the sampled rounds then search a fraction of the vertices,
     and only the maps of every vertex search them all.
@@ -501,7 +520,7 @@ class _Searches:
         return self.dense(kk).query(queries, k=1, eps=_DENSE_EPS, workers=-1)[1].astype(np.int64)
 
     def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
-        """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest."""
+        """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest (:class:`_Nearest`)."""
         return self.to_vertices(self.sample(kk).query(queries))
 
 
@@ -577,8 +596,9 @@ def _sampled_zoomout(
     dimensions visit most of their leaves) the searches are :func:`_nearest_profiles`
     (no kd-tree), each image among ``trees``'s targets and each preimage among the sample only.
 
-    Every search here is exact among the vertices it searches: ``trees``'s targets, a
-    subset of the vertices on a large mesh (``search_vertices`` of :func:`intrinsic_symmetry`).
+    Every search here is among ``trees``'s targets, a subset of the vertices on a large
+    mesh (``search_vertices`` of :func:`intrinsic_symmetry`), and exact but for near ties
+    where queries far from the points go by float32 brute force (:class:`_Nearest`).
     """
     fitted = None
     for kk in ks:
@@ -889,7 +909,7 @@ def _sign_hypotheses(
     if keep is not None:  # the images among an even subset that holds the rows
         sub_emb, rows = sub_emb[keep], np.searchsorted(keep, rows)
     tree = cKDTree(sub_emb)  # default leaves: its searches are approximate (eps), so the leaf size would change them
-    # the thesis's signs' exact map: on the tree, or by brute force where it lies far from the rows
+    # the thesis's signs' map: by the exact tree search, or by brute force where it lies far from the rows (:class:`_Nearest`)
     base = _consistency(sub_emb, signs[cols], rows, _Nearest(sub_emb, tree=tree).query(sub_emb[rows] * signs[cols]))
     if base < accept:
         return signs, base, base
@@ -1067,8 +1087,7 @@ def intrinsic_symmetry(
     vertex sample with the orientation test's frames on it, for each seed that step 9 may
     draw: see below); the orientation hypothesis's map (step 8) with step 9's geodesic probe
     and the sampled searches beside the pairing hypotheses (steps 5-7); the
-    hypotheses' refinements of step 9; step 11's map of every vertex beside step 7's
-    (reported as ``map_before_refine``); the trials of step 12 and the geodesic and
+    hypotheses' refinements of step 9; the trials of step 12 and the geodesic and
     biharmonic realignments of step 14, whose Dijkstra searches hold the GIL while the
     other branch's products run. Each branch touches only its own data, and the choices
     are made afterwards in the fixed order, so the result is the same bits as run one after
@@ -1417,7 +1436,7 @@ def intrinsic_symmetry(
     # drawn on the core that ARPACK (single-threaded) leaves idle; the true seed's is used
     # (the same bits as drawn after step 4). Not the geodesic probe: scipy's Dijkstra holds
     # the GIL, which ARPACK's Python loop needs at every step.
-    ahead = torch.Generator()
+    ahead = torch.Generator(device=gen.device)
     ahead.set_state(gen.get_state())
     guesses = [draw_seed(ahead) for _ in range(2 + (len(weights) if sign_hypotheses else 0))][1:]
     # the same for the sign hypotheses' samples (step 7): pairing i draws the seed after the
