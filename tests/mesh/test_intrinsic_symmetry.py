@@ -357,11 +357,10 @@ class TestVertexSubsample:
         monkeypatch.setattr(intrinsic._Nearest, "brute", lambda self, q, *a, **k: used.append(q.shape[0]) or original(self, q, *a, **k))
         search = intrinsic._Nearest(points)
         assert np.array_equal(search.query(near), truth.query(near)[1])
-        assert used == [near[::32].shape[0]]  # the probe only
+        assert used == []  # the kd-tree only (after the probe of every 32nd query)
         assert np.array_equal(search.query(far), truth.query(far)[1])
-        assert used[-1] == far.shape[0]  # all by brute force
-        index, dist = search.brute(far[:50], dist=True)
-        assert np.allclose(dist, truth.query(far[:50])[0], rtol=1e-10)
+        assert used == [far.shape[0]]  # all by brute force
+        assert np.allclose(search.distances(far[:50]), truth.query(far[:50])[0], rtol=1e-10)
 
     def test_sample_seed_read_ahead(self, blob, monkeypatch):
         # step 9's sample is drawn from the seed after the eigensolver's and one per pairing

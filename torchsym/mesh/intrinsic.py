@@ -59,6 +59,7 @@ from torchsym.mesh.orientation import (
     orientation_operators,
     orientation_reversing_map,
     reduce_descriptors,
+    tangent_frames,
 )
 from torchsym.mesh.pairs import eigenfunction_signs, symmetric_pairs
 from torchsym.mesh.repair import close_holes
@@ -382,9 +383,9 @@ class _Nearest:
     So every 32nd query is first answered by brute force; when their nearest points lie a
     median of more than ``_BRUTE_BEYOND`` times the points' spacing away (the median distance
     between neighbouring points, from 256 of them), all queries are, else the kd-tree
-    answers them. Brute force is ``argmin_j |p_j|^2 - 2 q.p_j`` with the points augmented
-    once to ``[P | |p|^2]`` and each block of queries to ``[-2 q | 1]``: one product, in
-    float32 (the probes' distances in float64). Its rounding, about ``1e-7`` of ``|p|^2``,
+    answers them. Brute force is :func:`_argmin_profiles` (``argmin_j |p_j|^2 - 2 q.p_j``,
+    the points' table built once), in float32 (the probes' distances in float64), the
+    queries split between two threads. Its rounding, about ``1e-7`` of ``|p|^2``,
     can only pick a near tie instead of the nearest point, for queries that lie beyond 3
     spacings anyway: on 18 benchmark meshes (FAUST, TOSCA, synthetic) two maps changed, at
     0.3 % and 0.1 % of the vertices, against float64 (twice as slow: the twisted
@@ -403,8 +404,7 @@ class _Nearest:
         self.points = np.asarray(points, dtype=np.float64)
         self.dim = self.points.shape[1]
         self._tree = tree
-        self._aug_t: np.ndarray | None = None  # (D + 1, N), built on the first brute-force search
-        self._aug_t32: np.ndarray | None = None  # the same in float32
+        self._table32 = self._table64 = None  # _profile_table's, built on the first brute-force search
         self._spacing = spacing
 
     @property
@@ -422,44 +422,33 @@ class _Nearest:
             self._spacing = float(np.median(gaps))
         return self._spacing
 
-    def _block(self, queries: np.ndarray, chunk: int, dist: bool = False):
-        out = np.empty(queries.shape[0], dtype=np.int64)
-        best = np.empty(queries.shape[0])
-        for start in range(0, queries.shape[0], chunk):
-            q = queries[start : start + chunk]
-            aug = np.empty((q.shape[0], self.dim + 1), dtype=np.float64 if dist else np.float32)  # (b, D + 1)
-            np.multiply(q, -2.0, out=aug[:, :-1])
-            aug[:, -1] = 1.0
-            prod = aug @ (self._aug_t if dist else self._aug_t32)  # (b, N): squared distances less |q|^2
-            out[start : start + chunk] = np.argmin(prod, axis=1)
-            if dist:
-                best[start : start + chunk] = prod[np.arange(q.shape[0]), out[start : start + chunk]] + np.einsum("ij,ij->i", q, q)
-        return (out, np.sqrt(np.maximum(best, 0.0))) if dist else out
-
     def prepare(self) -> _Nearest:
-        """Build the kd-tree, the spacing and the augmented points now (before threads share them)."""
+        """Build the kd-tree, the spacing and the brute-force tables now (before threads share them)."""
         _ = self.spacing
-        if self._aug_t is None:
-            aug_t = np.empty((self.dim + 1, self.points.shape[0]))
-            aug_t[:-1] = self.points.T
-            aug_t[-1] = np.einsum("ij,ij->i", self.points, self.points)
-            self._aug_t, self._aug_t32 = aug_t, aug_t.astype(np.float32)
+        if self._table32 is None:
+            self._table64 = _profile_table(self.points, np.float64)
+            self._table32 = _profile_table(self.points)
         return self
 
-    def brute(self, queries: np.ndarray, chunk: int = 128, dist: bool = False):
-        """Brute force: for each row of ``queries (Q, D)`` the index of the nearest point (and, with ``dist``, its distance)."""
-        if self._aug_t is None:
+    def brute(self, queries: np.ndarray) -> np.ndarray:
+        """Brute force in float32 (:func:`_argmin_profiles`): for each row of ``queries (Q, D)`` the nearest point, ``(Q,)`` int64."""
+        if self._table32 is None:
             self.prepare()
-        queries = np.asarray(queries, dtype=np.float64)
-        if dist or queries.shape[0] < 2 * chunk:
-            return self._block(queries, chunk, dist)
+        if queries.shape[0] < 256:
+            return _argmin_profiles(queries, self._table32)
         half = queries.shape[0] // 2
-        return np.concatenate(run_branches([partial(self._block, queries[:half], chunk), partial(self._block, queries[half:], chunk)]))
+        return np.concatenate(run_branches([partial(_argmin_profiles, part, self._table32) for part in (queries[:half], queries[half:])]))
+
+    def distances(self, queries: np.ndarray) -> np.ndarray:
+        """Brute force in float64: for each row of ``queries (Q, D)`` the distance to the nearest point."""
+        if self._table64 is None:
+            self.prepare()
+        _, best = _argmin_profiles(queries, self._table64, values=True)
+        return np.sqrt(np.maximum(best + np.einsum("ij,ij->i", queries, queries), 0.0))
 
     def query(self, queries: np.ndarray) -> np.ndarray:
         """For each row of ``queries (Q, D)`` the index of the nearest point, ``(Q,)`` int64."""
-        _, far = self.brute(queries[::32], dist=True)
-        if float(np.median(far)) > _BRUTE_BEYOND * self.spacing:
+        if float(np.median(self.distances(queries[::32]))) > _BRUTE_BEYOND * self.spacing:
             return self.brute(queries)
         return self.tree.query(queries, k=1, workers=-1)[1].astype(np.int64)
 
@@ -758,27 +747,50 @@ class GeodesicProbe:
         return float(np.mean(moved < self.radius))
 
 
+def _profile_table(profiles: np.ndarray, dtype=np.float32) -> np.ndarray:
+    """``profiles (V, A)`` augmented to ``[P | |p|^2]`` and transposed, ``(A + 1, V)`` in ``dtype``: what :func:`_argmin_profiles` searches."""
+    prof = np.asarray(profiles, dtype=np.float64)
+    table = np.empty((prof.shape[1] + 1, prof.shape[0]), dtype=dtype)
+    table[:-1] = prof.T
+    table[-1] = np.einsum("ij,ij->i", prof, prof)
+    return table
+
+
+def _argmin_profiles(queries: np.ndarray, table: np.ndarray, chunk: int = 512, values: bool = False):
+    """For each row of ``queries (Q, A)`` the index of the nearest profile of ``table`` (:func:`_profile_table`).
+
+    Brute force: each block of ``chunk`` queries is augmented to ``[-2 q | 1]``, so that one
+    product in the table's dtype gives ``|p|^2 - 2 q.p``, the squared distances less
+    ``|q|^2``. With ``values``, also that minimum ``(Q,)``.
+    """
+    q = np.asarray(queries)
+    out = np.empty(q.shape[0], dtype=np.int64)
+    best = np.empty(q.shape[0], dtype=table.dtype)
+    for start in range(0, q.shape[0], chunk):
+        block = q[start : start + chunk]
+        aug = np.empty((block.shape[0], table.shape[0]), dtype=table.dtype)  # (b, A + 1)
+        np.multiply(block, -2.0, out=aug[:, :-1])
+        aug[:, -1] = 1.0
+        dist = aug @ table  # (b, V)
+        idx = np.argmin(dist, axis=1)
+        out[start : start + chunk] = idx
+        if values:
+            best[start : start + chunk] = dist[np.arange(idx.size), idx]
+    return (out, best) if values else out
+
+
 def _nearest_profiles(queries: np.ndarray, profiles: np.ndarray, chunk: int = 512) -> np.ndarray:
     """For each row of ``queries (Q, A)`` the index of the nearest row of ``profiles (V, A)``.
 
-    Brute force by ``|p|^2 - 2 q.p`` in float32 blocks: with ``A`` about 64 a kd-tree
-    visits most of its leaves, and the products are several times faster. The rounding
-    can pick a near tie instead of the nearest row when the rows share a large common
-    offset against their spread; the callers' profiles (distances on a unit-area mesh,
-    eigenfunction embeddings) are of order 1. :class:`~torchsym.matching.KNNIndex` with
-    ``method="brute"`` is exact (float64, re-ranked) but 2-3x slower on these blocks, and
-    step 14 makes 14 such searches per mesh.
+    Brute force by ``|p|^2 - 2 q.p`` in float32 (:func:`_argmin_profiles`): with
+    ``A`` about 64 a kd-tree visits most of its leaves, and the products are several times
+    faster. The rounding can pick a near tie instead of the nearest row when the rows share
+    a large common offset against their spread; the callers' profiles (distances on a
+    unit-area mesh, eigenfunction embeddings) are of order 1.
+    :class:`~torchsym.matching.KNNIndex` with ``method="brute"`` is exact (float64,
+    re-ranked) but 2-3x slower on these blocks, and step 14 makes 14 such searches per mesh.
     """
-    prof = profiles.astype(np.float32)  # (V, A)
-    norms = np.einsum("ij,ij->i", prof, prof)  # (V,)
-    q = queries.astype(np.float32)
-    out = np.empty(q.shape[0], dtype=np.int64)
-    for start in range(0, q.shape[0], chunk):
-        dist = q[start : start + chunk] @ prof.T  # (b, V)
-        dist *= -2.0  # in place: |p|^2 - 2 q.p, the same bits as the expression, without its temporaries
-        dist += norms
-        out[start : start + chunk] = np.argmin(dist, axis=1)
-    return out
+    return _argmin_profiles(queries, _profile_table(profiles), chunk)
 
 
 def _anchor_realignment(
@@ -1418,7 +1430,7 @@ def intrinsic_symmetry(
     ks = np.linspace(n_eigen, refine_k, refine_iters + 1).round().astype(int)[1:] if refine_iters else np.zeros(0, int)
     schedule = np.linspace(refine_k, polish_k, polish_iters + 1).round().astype(int)[1:] if polish else np.zeros(0, int)
 
-    def draw_sample(seed: int, graph, two_ring, wound: bool) -> tuple:
+    def draw_sample(seed: int, graph, two_ring, frames) -> tuple:
         # the sample, from the seed of its generator, and the orientation test's frames on it
         tic = time.perf_counter()
         rng = np.random.default_rng(seed)
@@ -1427,7 +1439,7 @@ def intrinsic_symmetry(
         if n > search_vertices:
             # a generator of its own, so that the draws below do not depend on search_vertices
             targets = _even_subset(v, rows, n_targets, np.random.default_rng(rng.bit_generator.seed_seq.spawn(1)[0]))
-        orient = OrientationTest(v, f, rows, two_ring) if wound else None
+        orient = OrientationTest(v, f, rows, two_ring, frames) if frames is not None else None
         return seed, rng, rows, targets, orient, time.perf_counter() - tic
 
     # the sample's seed is the generator's draw after the eigensolver's and the sign
@@ -1455,12 +1467,13 @@ def intrinsic_symmetry(
         area = mass_matrix(v, f).diagonal()  # (V',)
         has_boundary = bool((edge_face_counts(f)[1] == 1).any())
         wound = bool(refine_iters) and (refine_orientation > 0 or polish or realign) and consistently_wound(f)
+        frames = tangent_frames(v, f) if wound else None  # the orientation test's, the same for every sample
         t_topology = time.perf_counter() - tic
-        samples = [draw_sample(g, graph, two_ring, wound) for g in guesses]
+        samples = [draw_sample(g, graph, two_ring, frames) for g in guesses]
         sign_samples = {g: _sign_sample(n, np.random.default_rng(g), v, search_vertices) for g in sign_guesses}
-        return graph, two_ring, area, has_boundary, wound, t_topology, samples, sign_samples
+        return graph, two_ring, area, has_boundary, wound, frames, t_topology, samples, sign_samples
 
-    (big_evals, big, t_eigen), (graph, two_ring, area, has_boundary, wound, t_topology, samples, sign_samples) = run_branches(
+    (big_evals, big, t_eigen), (graph, two_ring, area, has_boundary, wound, frames, t_topology, samples, sign_samples) = run_branches(
         [eigen, topology]
     )
     evals, evecs = np.maximum(big_evals[:n_eigen], 0.0), big[:, :n_eigen]  # (k,), (V', k)
@@ -1504,7 +1517,7 @@ def intrinsic_symmetry(
         notes.append(f"select_samples raised from {select_samples} to {n_rows}, 4 x {'polish_k' if polish else 'refine_k'}")
     if n > search_vertices and n_targets > search_vertices:
         notes.append(f"search_vertices raised from {search_vertices} to {n_targets}, twice the vertex sample")
-    sample = next((s for s in samples if s[0] == seed), None) or draw_sample(seed, graph, two_ring, wound)
+    sample = next((s for s in samples if s[0] == seed), None) or draw_sample(seed, graph, two_ring, frames)
     _, rng, rows, targets, orient, t_sample = sample
     trees = _Searches(big, targets)
     seen: list[np.ndarray] = []

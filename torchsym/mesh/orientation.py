@@ -50,6 +50,7 @@ __all__ = [
     "orientation_reversing_map",
     "reduce_descriptors",
     "resolvent_mask",
+    "tangent_frames",
 ]
 
 
@@ -351,6 +352,21 @@ def orientation_reversal(
     return OrientationTest(v, faces, rows, neighbourhood)(vmap)
 
 
+def tangent_frames(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Right-handed tangent frames ``(e1, e2)``, each ``(V, 3)``, about the area-weighted vertex normals of the winding."""
+    v = vertices
+    face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
+    normal = np.zeros_like(v)
+    for c in range(3):
+        np.add.at(normal, faces[:, c], face_normal)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), np.finfo(float).tiny)
+    # a right-handed tangent frame (e1, e2, n) at every vertex
+    helper = np.where(np.abs(normal[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    e1 = np.cross(normal, helper)
+    e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
+    return e1, np.cross(normal, e1)
+
+
 class OrientationTest:
     """:func:`orientation_reversal` for many maps of one mesh: the frames and neighbourhoods computed once.
 
@@ -359,23 +375,15 @@ class OrientationTest:
         faces: ``(F, 3)`` int64 consistently wound triangles.
         rows: ``(R,)`` int64 vertices to test.
         neighbourhood: the ``(V, V)`` CSR of :func:`~torchsym.mesh.operators.ring_neighbourhood`.
+        frames: :func:`tangent_frames` of the mesh, when the caller already has them.
 
     Calling it with a map ``(V,)`` int64 (-1: no image) gives what
     :func:`orientation_reversal` gives for that map, the same bits.
     """
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray, rows: np.ndarray, neighbourhood):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, rows: np.ndarray, neighbourhood, frames=None):
         v = vertices
-        face_normal = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])  # (F, 3) area-weighted
-        normal = np.zeros_like(v)
-        for c in range(3):
-            np.add.at(normal, faces[:, c], face_normal)
-        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), np.finfo(float).tiny)
-        # a right-handed tangent frame (e1, e2, n) at every vertex
-        helper = np.where(np.abs(normal[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
-        e1 = np.cross(normal, helper)
-        e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), np.finfo(float).tiny)
-        e2 = np.cross(normal, e1)
+        e1, e2 = tangent_frames(v, faces) if frames is None else frames
         reach = neighbourhood.tocsr()[rows].tocoo()  # (R, V)
         self.centre, self.nbr = rows[reach.row], reach.col  # one entry per (row, neighbour)
         off = v[self.nbr] - v[self.centre]  # (E, 3)
