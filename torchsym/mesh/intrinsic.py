@@ -1113,8 +1113,8 @@ def intrinsic_symmetry(
     beside the eigensolver, with the sampled searches' choice of brute force
     (:class:`_Nearest`), took it to 0.89 s (0.99 s before, in the same interleaved runs),
     and with ``map_before_refine`` searched when first read and that brute force in
-    float32, the latest benchmark run measured 0.77 s, 2.9x the eigendecomposition alone
-    (0.27 s), and 0.50 / 0.62 s per FAUST / TOSCA shape.
+    float32, the latest benchmark run measured 0.78 s, 2.9x the eigendecomposition alone
+    (0.26 s), and 0.49 / 0.61 s per FAUST / TOSCA shape.
 
     Args:
         mesh: the input :class:`Mesh` (any pose, may have holes).
