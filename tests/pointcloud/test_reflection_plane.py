@@ -202,6 +202,34 @@ class TestSynthetic:
         refl = reflect_points(c.points[has].double(), c.normal.double(), c.offset.double())
         assert torch.allclose(refl, c.points[c.mirror[has]].double(), atol=1e-4)
 
+    def test_mirror_complete_given_plane_without_motion(self):
+        g = torch.Generator().manual_seed(3)
+        pts = torch.randn(500, 3, generator=g, dtype=torch.float64) * torch.tensor([1.0, 2.0, 3.0], dtype=torch.float64)
+        c = mirror_complete(pts, normal=torch.tensor([0.0, 2.0, 0.0]), rigid_motion=False, generator=1, dtype=torch.float64)
+        assert torch.equal(c.normal, torch.tensor([0.0, 1.0, 0.0], dtype=torch.float64))
+        assert float(c.offset) == pytest.approx(-float(pts[:, 1].mean()))
+        # the kept half (first half of the result) is the input itself, unmoved, all on one side
+        kept = c.points[: c.points.shape[0] // 2]
+        assert all(bool((pts == q).all(1).any()) for q in kept)
+        side = kept[:, 1] + c.offset
+        assert bool((side >= 0).all()) or bool((side < 0).all())
+        refl = c.points[c.mirror].clone()
+        refl[:, 1] = -2 * c.offset - refl[:, 1]
+        assert torch.allclose(refl, c.points, atol=1e-12)
+
+    @pytest.mark.parametrize(
+        "normal, error, message",
+        [
+            (torch.zeros(3), InputValueError, "normal: expected a non-zero vector"),
+            (torch.tensor([0.0, float("nan"), 1.0]), InputValueError, "normal: expected finite values"),
+            (torch.ones(2), InputShapeError, r"normal: expected a \(3,\) vector, got shape \(2,\)"),
+            ("x", InputShapeError, "normal: expected a tensor or array, got str"),
+        ],
+    )
+    def test_mirror_complete_bad_normal(self, normal, error, message):
+        with pytest.raises(error, match=message):
+            mirror_complete(torch.randn(10, 3), normal=normal)
+
     def test_mirror_complete_real_mesh(self, shared_data):
         mesh = torchsym.io.read_mesh(shared_data / "meshes" / "cow.off")
         pts = sample_surface(mesh, 4000, generator=0)

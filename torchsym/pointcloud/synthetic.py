@@ -10,7 +10,8 @@ import math
 
 import torch
 
-from torchsym.core.checks import check_in_range, check_int, check_points, check_positive
+from torchsym.core.checks import as_tensor, check_finite, check_in_range, check_int, check_points, check_positive
+from torchsym.errors import InputShapeError, InputValueError
 from torchsym.core.random import make_generator
 from torchsym.core.results import Result
 from torchsym.geometry.reflection import reflect_points
@@ -107,28 +108,52 @@ def sample_surface(mesh: Mesh, n: int, *, generator: torch.Generator | int | Non
 
 
 def mirror_complete(
-    points: torch.Tensor, *, generator: torch.Generator | int | None = None, dtype: torch.dtype = torch.float32
+    points: torch.Tensor,
+    *,
+    normal: torch.Tensor | None = None,
+    rigid_motion: bool = True,
+    generator: torch.Generator | int | None = None,
+    dtype: torch.dtype = torch.float32,
 ) -> SymmetricCloud:
     """Ground truth from real geometry: cut by a random plane through the centre of mass,
     replace the side with fewer points by the mirror of the other, move rigidly at random.
 
     Args:
         points: ``(N, 3)`` points of a real shape (e.g. :func:`sample_surface` of a mesh).
+        normal: ``(3,)`` normal of the cutting plane (any non-zero length), or None for a
+            direction uniform on the sphere. A coordinate axis with ``rigid_motion=False``
+            gives the pose of the thesis's test data (Sec. 5.2.4, models of the symmetry
+            challenge stored upright, their planes along the axes), where the thesis's
+            z-favouring perturbation (:func:`perturb`) keeps the symmetry exact.
+        rigid_motion: move the result by a uniformly random rotation and translation.
         generator: the source of randomness (``torch.Generator``); None uses a fresh
             generator seeded with 0, so the same call gives the same bits.
 
     Returns:
         :class:`SymmetricCloud` with about N points and the exact plane.
+
+    Raises:
+        InputShapeError: ``points`` not ``(N, 3)`` with N >= 4, or ``normal`` not ``(3,)``.
+        InputValueError: NaN or infinite values, or a zero ``normal``.
     """
     pts = check_points(points, "points", dim=3, min_points=4).to(torch.float64)
     gen = make_generator(generator)
-    normal = torch.randn(3, generator=gen, dtype=torch.float64)
+    if normal is None:
+        normal = torch.randn(3, generator=gen, dtype=torch.float64)
+    else:
+        normal = as_tensor(normal, "normal", dtype=torch.float64)
+        if normal.shape != (3,):
+            raise InputShapeError(f"normal: expected a (3,) vector, got shape {tuple(normal.shape)}")
+        check_finite(normal, "normal")
+        if float(normal.norm()) == 0.0:
+            raise InputValueError("normal: expected a non-zero vector, got a zero vector")
     normal = normal / normal.norm()
     offset = -(normal * pts.mean(0)).sum()
     side = pts @ normal + offset
     half = pts[side >= 0] if int((side >= 0).sum()) >= int((side < 0).sum()) else pts[side < 0]
     cloud = _mirror_half(half, normal, offset)
-    cloud = random_rigid_motion(cloud, translation=float((pts.max(0).values - pts.min(0).values).norm()), generator=gen)
+    if rigid_motion:
+        cloud = random_rigid_motion(cloud, translation=float((pts.max(0).values - pts.min(0).values).norm()), generator=gen)
     return SymmetricCloud(cloud.points.to(dtype), cloud.normal.to(dtype), cloud.offset.to(dtype), cloud.mirror)
 
 
