@@ -35,3 +35,27 @@ class TestCLI:
     def test_unknown_setting(self, tmp_path, capsys):
         code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_strats=2"])
         assert code == 2 and "did you mean 'n_starts'" in capsys.readouterr().err
+
+    def test_out_that_cannot_be_created(self, tmp_path, capsys):
+        blocker = tmp_path / "file.txt"
+        blocker.write_text("not a folder")
+        code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(blocker / "sub"), "-q"])
+        assert code == 2 and "--out: cannot create the folder" in capsys.readouterr().err
+        assert main(["demo", "--out", str(blocker / "sub")]) == 2
+        assert "--out: cannot create the folder" in capsys.readouterr().err
+
+    def test_never_overwrites_an_input(self, tmp_path, capsys):
+        import shutil
+
+        sample = torchsym.data.sample_path("chair.ply")
+        shutil.copy(sample, tmp_path / "chair.ply")
+        # an input named as chair.ply's picture of the plane would be written
+        shutil.copy(sample, tmp_path / "chair_plane.ply")
+        before = (tmp_path / "chair_plane.ply").read_bytes()
+        code = main(["detect", str(tmp_path), "--out", str(tmp_path), "-q"])
+        err = capsys.readouterr().err
+        assert code == 1 and "would overwrite the input" in err and "chair_plane.ply" in err
+        assert (tmp_path / "chair_plane.ply").read_bytes() == before
+        assert not (tmp_path / "chair.json").exists()  # nothing of the refused input was written
+        assert (tmp_path / "chair_plane.json").is_file() and (tmp_path / "chair_plane_plane.ply").is_file()
+        assert not [q for q in tmp_path.iterdir() if q.name.startswith(".")]  # staging folders removed

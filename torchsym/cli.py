@@ -64,10 +64,67 @@ def _summary(result: Any) -> str:
     return f"{d['type']}: " + ", ".join(parts)
 
 
+def _make_out(out: Path) -> None:
+    from torchsym.errors import InputFileError
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputFileError(f"--out: cannot create the folder '{out}' ({exc.strerror or exc})") from None
+
+
+def _write_outputs(
+    result: Any, data: Any, record: dict[str, Any], out: Path, stem: str, figures: bool, protected: frozenset[Path]
+) -> list[str]:
+    """Write ``<stem>.json`` and the result's pictures into ``out``; return the paths written.
+
+    Everything is written into a fresh folder inside ``out`` first and then moved into
+    place, so a file that would replace one of this run's inputs (``protected``; e.g. an
+    input named ``chair_plane.ply`` beside ``chair.ply`` with ``--out`` on their folder)
+    is refused with :class:`InputFileError` before anything is overwritten.
+    """
+    import shutil
+    import tempfile
+
+    from torchsym.errors import InputFileError, TorchsymError
+
+    _make_out(out)
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{stem}-", dir=out))
+    except OSError as exc:
+        raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
+    try:
+        names = [Path(q).name for q in result.write_artifacts(data, staging, stem)] if figures else []
+        record["artifacts"] = [str(out / name) for name in names]
+        (staging / f"{stem}.json").write_text(json.dumps(record, indent=2))
+        names.insert(0, f"{stem}.json")
+        clash = [name for name in names if (out / name).resolve() in protected]
+        if clash:
+            raise InputFileError(
+                f"--out: writing the results of '{stem}' into '{out}' would overwrite the input "
+                f"'{out / clash[0]}'; choose another --out"
+            )
+        for name in names:
+            (staging / name).replace(out / name)
+    except TorchsymError:
+        raise
+    except OSError as exc:
+        raise InputFileError(f"--out: cannot write the results of '{stem}' into '{out}' ({exc.strerror or exc})") from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return [str(out / name) for name in names]
+
+
 def _run_one(
-    path: Path | Any, stem: str, args: argparse.Namespace, overrides: dict[str, Any], bar: Any = None
+    path: Path | Any,
+    stem: str,
+    args: argparse.Namespace,
+    overrides: dict[str, Any],
+    bar: Any = None,
+    protected: frozenset[Path] = frozenset(),
 ) -> dict[str, Any]:
-    """Read, solve, write one input; ``bar`` (a tqdm bar, optional) advances one step per stage."""
+    """Read, solve, write one input; ``bar`` (a tqdm bar, optional) advances one step per stage.
+    No file in ``protected`` (the run's inputs, resolved) is ever written."""
     from torchsym.api import prepare
     from torchsym.core.config import build_pipeline
 
@@ -91,14 +148,7 @@ def _run_one(
               "seconds": seconds, "result": result.to_dict()}
     written: list[str] = []
     if args.out is not None:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        json_path = out / f"{stem}.json"
-        if not args.no_figures:
-            written = [str(p) for p in result.write_artifacts(data, out, stem)]
-        record["artifacts"] = written
-        json_path.write_text(json.dumps(record, indent=2))
-        written.insert(0, str(json_path))
+        written = _write_outputs(result, data, record, Path(args.out), stem, not args.no_figures, protected)
     if bar is not None:
         bar.update(1)
         bar.clear()
@@ -118,13 +168,19 @@ def _cmd_detect(args: argparse.Namespace) -> int:
     if not paths:
         print("torchsym detect: no inputs found", file=sys.stderr)
         return 2
+    protected = frozenset(p.resolve() for p in paths)
+    try:
+        _make_out(Path(args.out))
+    except TorchsymError as exc:
+        print(f"torchsym detect: {exc}", file=sys.stderr)
+        return 2
     failures = 0
     # three steps per input (read, solve, write), so a single input shows its stages too
     with tqdm(total=3 * len(paths), unit="step", disable=args.quiet, file=sys.stderr, leave=False) as bar:
         for p in paths:
             done = bar.n
             try:
-                _run_one(p, p.stem, args, overrides, bar)
+                _run_one(p, p.stem, args, overrides, bar, protected)
             except TorchsymError as exc:
                 failures += 1
                 bar.clear()
@@ -145,9 +201,15 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(f"torchsym demo: reflection plane of the embedded sample {path.name} (4,000 points, known plane)")
     from tqdm import tqdm
 
+    from torchsym.errors import TorchsymError
+
     args.config, args.kind, args.no_figures = None, None, False
-    with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
-        record = _run_one(path, "chair", args, {}, bar)
+    try:
+        with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
+            record = _run_one(path, "chair", args, {}, bar, frozenset([path.resolve()]))
+    except TorchsymError as exc:
+        print(f"torchsym demo: {exc}", file=sys.stderr)
+        return 2
     n_true, b_true = data.sample_plane()
     import torch
 
