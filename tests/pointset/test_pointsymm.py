@@ -15,6 +15,7 @@ from torchsym.geometry import plane_angle
 from torchsym.manifolds import SpecialOrthogonal
 from torchsym.pointset import PointSymm, PointSymmResult, point_symm
 from torchsym.pointset.synthetic import make_symmetric_pointset
+from torchsym.pointset.transform import reflection_from_rotations
 
 DT = torch.float64
 
@@ -186,6 +187,36 @@ class TestPointSymm:
         res = point_symm(x)
         assert math.degrees(float(plane_angle(res.normal, truth))) < 2.0
         assert float((res.permutation == torch.arange(300)).double().mean()) < 0.5
+
+    def test_set_in_a_proper_subspace(self):
+        # an exact symmetric set of R^3 placed in a 3-D affine subspace of R^7: solved inside
+        # its hull, the plane comes back in R^7 with the same mirrors
+        s = planted(60, 3, 21)
+        q, _ = torch.linalg.qr(torch.randn(7, 3, generator=gen(4), dtype=DT))
+        shift = torch.randn(7, generator=gen(5), dtype=DT)
+        x = s.points @ q.T + shift
+        res = point_symm(x)
+        flat = point_symm(s.points)
+        assert torch.equal(res.permutation, flat.permutation) and torch.equal(res.permutation, s.correspondence)
+        assert math.degrees(float(plane_angle(res.normal, q @ s.normal))) < 1e-6
+        mids = 0.5 * (x + x[res.permutation])
+        assert float((mids @ res.normal + res.offset).abs().max()) < 1e-9
+        assert float((res.translation @ res.normal + res.offset).abs()) < 1e-9
+        refl = reflection_from_rotations(list(res.rotations))
+        assert torch.allclose(refl, torch.eye(7, dtype=DT) - 2 * torch.outer(res.normal, res.normal), atol=1e-12)
+        assert res.score == pytest.approx(flat.score)
+        # a warm start in R^7 is taken into the hull
+        tilt = q @ (s.normal + 0.05 * torch.tensor([1.0, -1.0, 0.5], dtype=DT))
+        warm = point_symm(x, initial=(tilt, -float(tilt @ (q @ (-s.offset * s.normal) + shift))))
+        assert math.degrees(float(plane_angle(warm.normal, res.normal))) < 1e-6
+
+    def test_two_points_in_high_dimension(self):
+        pts = torch.tensor([[0.0, 1.0, 2.0, 3.0, 4.0], [2.0, 1.0, 0.0, 3.0, 5.0]], dtype=DT)
+        res = point_symm(pts)
+        d = pts[1] - pts[0]
+        assert math.degrees(float(plane_angle(res.normal, d / d.norm()))) < 1e-6
+        assert float(0.5 * (pts[0] + pts[1]) @ res.normal + res.offset) == pytest.approx(0.0, abs=1e-12)
+        assert res.permutation.tolist() == [1, 0]
 
     def test_initial_plane(self):
         # a warm start a few degrees off the truth converges to the exact plane
