@@ -15,8 +15,11 @@ from torchsym.image.axes import (
     build_result,
     clip_line_to_image,
     pair_axes,
+    to_input_pixels,
 )
+from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.io import read_image
+from torchsym.metrics.axes import axis_angle, axis_center_distance
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -89,3 +92,44 @@ class TestRealPhotos:
         img = read_image(folder / "refs_039.jpg")
         res = torchsym.image.boundary_clique_axes(img)
         assert res.image_size == tuple(img.shape[-2:]) and res.axes.shape[0] >= 1
+
+
+class TestMaxSide:
+    def test_to_input_pixels(self):
+        # a line through two points of a 320 x 240 copy, mapped to the 1280 x 960 input
+        p1, p2 = torch.tensor([10.0, 20.0]), torch.tensor([200.0, 150.0])
+        line = pair_axes(torch.cat([p1, p2])[None, :2], torch.cat([p1, p2])[None, 2:])[0]
+        res = build_result([line], [torch.tensor([0])], [1.0], torch.cat([p1, p2])[None], 240, 320, "test")
+        big = to_input_pixels(res, 960, 1280)
+        assert big.image_size == (960, 1280) and big.info["working_size"] == (240, 320)
+        q1, q2 = (p1 + 0.5) * 4 - 0.5, (p2 + 0.5) * 4 - 0.5
+        assert torch.allclose(big.pairs[0], torch.cat([q1, q2]))
+        a, b, c = big.lines[0].double()
+        assert abs(float(torch.hypot(a, b)) - 1) < 1e-6
+        # the mapped line is the perpendicular bisector of the mapped pair
+        mid = 0.5 * (q1 + q2).double()
+        assert abs(float(a * mid[0] + b * mid[1] + c)) < 1e-3
+        for end in big.axes[0].double().reshape(2, 2):
+            assert abs(float(a * end[0] + b * end[1] + c)) < 1e-3
+
+    @pytest.mark.parametrize("name", ["boundary_cliques", "ksymmetry"])
+    def test_large_image_detected_on_a_copy(self, name):
+        img, truth = mirrored_objects_image(1, height=240, width=320, generator=torch.Generator().manual_seed(2))
+        big = torch.nn.functional.interpolate(img[None], size=(960, 1280), mode="bilinear", align_corners=False)[0]
+        truth_big = (truth.double() + 0.5) * 4 - 0.5
+        solver = torchsym.SOLVERS.get(name).cls
+        res = solver(max_side=320)(big)
+        assert res.image_size == (960, 1280) and res.info["working_size"] == (240, 320)
+        assert float(axis_angle(res.axes[0].double(), truth_big[0])) < 3.0
+        assert float(axis_center_distance(res.axes[0].double(), truth_big[0])) < 0.05 * 960
+        # the same copy given by hand: the same detection, in the copy's pixels
+        small = torch.nn.functional.interpolate(big[None], size=(240, 320), mode="bilinear", align_corners=False, antialias=True)[0]
+        direct = solver(max_side=None)(small.clamp(0, 1))
+        assert torch.allclose(res.axes.double(), (direct.axes.double() + 0.5) * 4 - 0.5, atol=1e-3)
+        assert solver(max_side=2000)(img).info.get("working_size") is None  # smaller than max_side: untouched
+
+    @pytest.mark.parametrize("bad", [0, 8, 2.5, "640"])
+    def test_bad_max_side(self, bad):
+        for name in ("boundary_cliques", "ksymmetry"):
+            with pytest.raises(torchsym.errors.TorchsymError, match="max_side"):
+                torchsym.SOLVERS.get(name).cls(max_side=bad)

@@ -62,6 +62,7 @@ from torchsym.image.axes import (
     ReflectionAxesResult,
     axis_evidence,
     build_result,
+    check_max_side,
     empty_result,
     gradient_noise,
     mirror_correlation,
@@ -617,6 +618,9 @@ class BoundaryCliqueDetector(nn.Module):
     takes ``(C, H, W)`` or ``(B, C, H, W)`` float in [0, 1] and returns a
     :class:`~torchsym.image.axes.ReflectionAxesResult` (``B = 1``) or a
     :class:`~torchsym.image.axes.ReflectionAxesBatch`.
+
+    ``max_side`` (default 640, None: off): the longest side the image is detected at
+    (:func:`~torchsym.image.axes.run_batched`).
     """
 
     def __init__(
@@ -644,6 +648,7 @@ class BoundaryCliqueDetector(nn.Module):
         sift_candidates: bool | None = None,
         sift_weight: float = 0.5,
         num_features: int = 1000,
+        max_side: int | None = 640,
         seed: int = 0,
     ) -> None:
         super().__init__()
@@ -656,11 +661,12 @@ class BoundaryCliqueDetector(nn.Module):
             sift_candidates=sift_candidates, sift_weight=sift_weight, num_features=num_features,
         )
         _check_settings(**self.settings)
+        self.max_side = check_max_side(max_side)
         self.seed = check_int(seed, "seed", minimum=0)
 
     def extra_repr(self) -> str:
-        return ", ".join(f"{k}={v}" for k, v in self.settings.items()) + f", seed={self.seed}"
+        return ", ".join(f"{k}={v}" for k, v in self.settings.items()) + f", max_side={self.max_side}, seed={self.seed}"
 
     def forward(self, image: torch.Tensor):
         g = torch.Generator().manual_seed(self.seed)
-        return run_batched(boundary_clique_axes, image, {**self.settings, "generator": g})
+        return run_batched(boundary_clique_axes, image, {**self.settings, "generator": g}, max_side=self.max_side)

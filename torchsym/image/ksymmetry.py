@@ -58,6 +58,7 @@ from torchsym.image.axes import (
     ReflectionAxesResult,
     axis_evidence,
     build_result,
+    check_max_side,
     empty_result,
     gradient_noise,
     mirror_gradients,
@@ -490,6 +491,9 @@ class KSymmetryDetector(nn.Module):
     takes ``(C, H, W)`` or ``(B, C, H, W)`` float in [0, 1] and returns a
     :class:`~torchsym.image.axes.ReflectionAxesResult` (``B = 1``) or a
     :class:`~torchsym.image.axes.ReflectionAxesBatch`.
+
+    ``max_side``: as for :class:`~torchsym.image.boundary_cliques.BoundaryCliqueDetector`
+    (default 640).
     """
 
     def __init__(
@@ -506,9 +510,11 @@ class KSymmetryDetector(nn.Module):
         min_support: int = 3,
         score: str = "support",
         grow_threshold: float | None = 0.3,
+        max_side: int | None = 640,
     ) -> None:
         super().__init__()
         _check_score(score, grow_threshold)
+        self.max_side = check_max_side(max_side)
         self.settings = dict(
             num_features=check_int(num_features, "num_features", minimum=1),
             k1=None if k1 is None else check_int(k1, "k1", minimum=1),
@@ -524,7 +530,7 @@ class KSymmetryDetector(nn.Module):
         )
 
     def extra_repr(self) -> str:
-        return ", ".join(f"{k}={v}" for k, v in self.settings.items())
+        return ", ".join(f"{k}={v}" for k, v in self.settings.items()) + f", max_side={self.max_side}"
 
     def forward(self, image: torch.Tensor):
-        return run_batched(ksymmetry_axes, image, self.settings)
+        return run_batched(ksymmetry_axes, image, self.settings, max_side=self.max_side)
