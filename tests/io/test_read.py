@@ -42,6 +42,29 @@ class TestRead:
         kind, data = load_input(tmp_path / "b.npy")
         assert kind == "points" and data.shape == (20, 4)
 
+    @pytest.mark.parametrize("text", [
+        "//X,Y,Z,R,G,B\n{rows}",  # CloudCompare's ASCII export
+        "x y z\n{rows}",
+        "# scan 3\n{rows}",
+    ])
+    @pytest.mark.parametrize("sep", [" ", ",", ";", "\t"])
+    def test_text_points(self, tmp_path, text, sep):
+        pts = np.random.default_rng(1).random((7, 6))
+        rows = "\n".join(sep.join(f"{v:.17g}" for v in row) for row in pts) + "\n"
+        (tmp_path / "a.txt").write_text(text.format(rows=rows))
+        got = read_pointcloud(tmp_path / "a.txt", dtype=torch.float64)
+        assert torch.equal(got, torch.from_numpy(pts[:, :3]))
+
+    @pytest.mark.parametrize("content, message", [
+        (b"x y z\n1 2 3\nfour 5 6\n", "cannot read .* as rows of numbers"),  # only the first row may be a header
+        (b"x y z\n", "holds no points"),
+        (b"\xff\xfe\x00binary", "cannot read .* as text"),
+    ])
+    def test_text_points_bad(self, tmp_path, content, message):
+        (tmp_path / "a.xyz").write_bytes(content)
+        with pytest.raises(InputFileError, match=message):
+            read_pointcloud(tmp_path / "a.xyz")
+
     def test_files_not_modified(self, tmp_path):
         p = tmp_path / "c.ply"
         write_ply(p, torchsym.data.sample_pointcloud())
@@ -64,7 +87,8 @@ class TestRead:
         ("nope.ply", None, "does not exist"),
         ("junk.ply", b"this is not a ply file", "cannot read"),
         ("junk.npy", b"garbage", "cannot read"),
-        ("junk.xyz", b"a b c\n", "cannot read"),
+        ("junk.xyz", b"a b c\n", "holds no points"),  # a header row and nothing else
+        ("junk.txt", b"1 2 3\na b c\n", "cannot read"),
         ("two.xyz", b"1 2\n3 4\n", "expected at least 3 columns"),
         ("junk.png", b"not an image", "cannot decode"),
         ("thing.abc", b"x", "cannot tell what"),

@@ -6,6 +6,7 @@ NumPy; images through OpenCV. Files are only ever opened for reading.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -52,12 +53,44 @@ def _load_meshlab(p: Path, name: str) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
 
 
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_text_rows(p: Path) -> np.ndarray:
+    """Rows of numbers from a text point file, as scanners and CloudCompare write them:
+    separated by whitespace, commas or semicolons, ``#`` and ``//`` comments, and one
+    header line of column names (``X,Y,Z``) skipped when the first row is not numeric."""
+    try:
+        lines = p.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(f"path: cannot read {str(p)!r} as text ({exc})") from None
+    rows = [ln.replace(",", " ").replace(";", " ") for ln in lines]
+    first = next((i for i, ln in enumerate(rows) if ln.strip() and not ln.lstrip().startswith(("#", "//"))), None)
+    if first is not None and not all(_is_number(t) for t in rows[first].split()):
+        rows[first] = ""  # a header of column names
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # numpy's "input contained no data"
+            arr = np.loadtxt(rows, ndmin=2, comments=("#", "//"))
+    except ValueError as exc:
+        raise InputFileError(f"path: cannot read {str(p)!r} as rows of numbers ({exc})") from None
+    if arr.size == 0:
+        raise InputFileError(f"path: {str(p)!r} holds no points (no rows of numbers)")
+    return arr
+
+
 def read_pointcloud(path: str | Path, *, dtype: torch.dtype = torch.float32) -> torch.Tensor:
     """Read the points of a ``.ply .obj .off .stl .xyz .txt .pts .npy`` file as ``(N, D)``.
 
-    Mesh formats give their vertices. ``.xyz``/``.txt``/``.pts`` are whitespace text with
-    one point per row (extra columns such as normals or colours after the first three
-    are dropped); ``.npy`` must hold a 2-D float array.
+    Mesh formats give their vertices. ``.xyz``/``.txt``/``.pts`` are text with one point
+    per row, numbers separated by whitespace, commas or semicolons, ``#`` or ``//``
+    comments and an optional header row of column names (extra columns such as normals
+    or colours after the first three are dropped); ``.npy`` must hold a 2-D float array.
 
     Raises:
         InputFileError: missing, unreadable, or not a point cloud.
@@ -72,10 +105,7 @@ def read_pointcloud(path: str | Path, *, dtype: torch.dtype = torch.float32) -> 
         if arr.ndim != 2 or not np.issubdtype(arr.dtype, np.number):
             raise InputFileError(f"path: expected {str(p)!r} to hold a numeric (N, D) array, got {arr.dtype} {arr.shape}")
     elif suffix in (".xyz", ".txt", ".pts"):
-        try:
-            arr = np.loadtxt(p, ndmin=2, comments="#")
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise InputFileError(f"path: cannot read {str(p)!r} as rows of numbers ({exc})") from None
+        arr = _read_text_rows(p)
         if arr.shape[1] < 3:
             raise InputFileError(f"path: expected at least 3 columns (x y z) in {str(p)!r}, got {arr.shape[1]}")
         arr = arr[:, :3]
