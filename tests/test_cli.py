@@ -59,3 +59,21 @@ class TestCLI:
         assert not (tmp_path / "chair.json").exists()  # nothing of the refused input was written
         assert (tmp_path / "chair_plane.json").is_file() and (tmp_path / "chair_plane_plane.ply").is_file()
         assert not [q for q in tmp_path.iterdir() if q.name.startswith(".")]  # staging folders removed
+
+    def test_inputs_sharing_a_stem_keep_their_own_results(self, tmp_path, capsys):
+        import shutil
+
+        import numpy as np
+
+        sample = torchsym.data.sample_path("chair.ply")
+        (tmp_path / "a").mkdir()
+        (tmp_path / "b").mkdir()
+        shutil.copy(sample, tmp_path / "a" / "chair.ply")
+        shutil.copy(sample, tmp_path / "b" / "chair.ply")
+        np.savetxt(tmp_path / "a" / "chair.xyz", torchsym.data.sample_pointcloud().numpy())
+        out = tmp_path / "out"
+        assert main(["detect", str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(out), "-q", "--no-figures"]) == 0
+        names = sorted(q.name for q in out.iterdir())
+        assert names == ["chair_ply.json", "chair_ply_2.json", "chair_xyz.json"]
+        inputs = {json.loads((out / n).read_text())["input"] for n in names}
+        assert len(inputs) == 3

@@ -48,6 +48,22 @@ def _expand(inputs: Sequence[str]) -> list[Path]:
     return paths
 
 
+def _unique_stems(paths: Sequence[Path]) -> list[str]:
+    """Output names for ``paths``: the file's stem, with its suffix added where two inputs
+    share a stem (``chair.png``, ``chair.xyz`` -> ``chair_png``, ``chair_xyz``) and a count
+    where they still clash (the same name in two folders)."""
+    from collections import Counter
+
+    counts = Counter(p.stem for p in paths)
+    stems = [p.stem if counts[p.stem] == 1 else f"{p.stem}_{p.suffix.lstrip('.').lower()}" for p in paths]
+    seen: Counter[str] = Counter()
+    out = []
+    for stem in stems:
+        seen[stem] += 1
+        out.append(stem if seen[stem] == 1 else f"{stem}_{seen[stem]}")
+    return out
+
+
 def _summary(result: Any) -> str:
     d = result.to_dict()
     keys = [k for k in ("normal", "offset", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
@@ -74,14 +90,22 @@ def _make_out(out: Path) -> None:
 
 
 def _write_outputs(
-    result: Any, data: Any, record: dict[str, Any], out: Path, stem: str, figures: bool, protected: frozenset[Path]
+    result: Any,
+    data: Any,
+    record: dict[str, Any],
+    out: Path,
+    stem: str,
+    figures: bool,
+    protected: frozenset[Path],
+    written: set[Path],
 ) -> list[str]:
     """Write ``<stem>.json`` and the result's pictures into ``out``; return the paths written.
 
     Everything is written into a fresh folder inside ``out`` first and then moved into
     place, so a file that would replace one of this run's inputs (``protected``; e.g. an
     input named ``chair_plane.ply`` beside ``chair.ply`` with ``--out`` on their folder)
-    is refused with :class:`InputFileError` before anything is overwritten.
+    or a file this run already wrote (``written``, updated here) is refused with
+    :class:`InputFileError` before anything is overwritten.
     """
     import shutil
     import tempfile
@@ -104,8 +128,15 @@ def _write_outputs(
                 f"--out: writing the results of '{stem}' into '{out}' would overwrite the input "
                 f"'{out / clash[0]}'; choose another --out"
             )
+        clash = [name for name in names if (out / name).resolve() in written]
+        if clash:
+            raise InputFileError(
+                f"--out: writing the results of '{stem}' into '{out}' would overwrite '{out / clash[0]}', "
+                "written earlier in this run"
+            )
         for name in names:
             (staging / name).replace(out / name)
+            written.add((out / name).resolve())
     except TorchsymError:
         raise
     except OSError as exc:
@@ -122,9 +153,11 @@ def _run_one(
     overrides: dict[str, Any],
     bar: Any = None,
     protected: frozenset[Path] = frozenset(),
+    written: set[Path] | None = None,
 ) -> dict[str, Any]:
     """Read, solve, write one input; ``bar`` (a tqdm bar, optional) advances one step per stage.
-    No file in ``protected`` (the run's inputs, resolved) is ever written."""
+    No file in ``protected`` (the run's inputs, resolved) or in ``written`` (the files the
+    run wrote before) is ever written."""
     from torchsym.api import prepare
     from torchsym.core.config import build_pipeline
 
@@ -146,14 +179,16 @@ def _run_one(
     stage("writing")
     record = {"input": str(path) if isinstance(path, Path) else stem, "kind": kind, "config": pipeline.config.to_dict(),
               "seconds": seconds, "result": result.to_dict()}
-    written: list[str] = []
+    paths_out: list[str] = []
     if args.out is not None:
-        written = _write_outputs(result, data, record, Path(args.out), stem, not args.no_figures, protected)
+        paths_out = _write_outputs(
+            result, data, record, Path(args.out), stem, not args.no_figures, protected, set() if written is None else written
+        )
     if bar is not None:
         bar.update(1)
         bar.clear()
     print(f"{stem}: {_summary(result)} ({seconds:.3f} s)")
-    for w in written:
+    for w in paths_out:
         print(f"  wrote {w}")
     return record
 
@@ -169,6 +204,8 @@ def _cmd_detect(args: argparse.Namespace) -> int:
         print("torchsym detect: no inputs found", file=sys.stderr)
         return 2
     protected = frozenset(p.resolve() for p in paths)
+    stems = _unique_stems(paths)
+    written: set[Path] = set()
     try:
         _make_out(Path(args.out))
     except TorchsymError as exc:
@@ -177,10 +214,10 @@ def _cmd_detect(args: argparse.Namespace) -> int:
     failures = 0
     # three steps per input (read, solve, write), so a single input shows its stages too
     with tqdm(total=3 * len(paths), unit="step", disable=args.quiet, file=sys.stderr, leave=False) as bar:
-        for p in paths:
+        for p, stem in zip(paths, stems):
             done = bar.n
             try:
-                _run_one(p, p.stem, args, overrides, bar, protected)
+                _run_one(p, stem, args, overrides, bar, protected, written)
             except TorchsymError as exc:
                 failures += 1
                 bar.clear()

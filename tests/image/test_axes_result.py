@@ -128,7 +128,18 @@ class TestMaxSide:
         assert torch.allclose(res.axes.double(), (direct.axes.double() + 0.5) * 4 - 0.5, atol=1e-3)
         assert solver(max_side=2000)(img).info.get("working_size") is None  # smaller than max_side: untouched
 
-    @pytest.mark.parametrize("bad", [0, 8, 2.5, "640"])
+    @pytest.mark.parametrize("name", ["boundary_cliques", "ksymmetry"])
+    def test_strips_half_precision_and_small_images(self, name):
+        solver = torchsym.SOLVERS.get(name).cls
+        g = torch.Generator().manual_seed(0)
+        strip = solver()(torch.rand(1, 400, 8000, generator=g))  # the copy's short side stays at SIFT's 32
+        assert strip.image_size == (400, 8000) and strip.info["working_size"] == (32, 640)
+        half = solver(max_side=64)(torch.rand(1, 100, 120, generator=g).half())
+        assert half.image_size == (100, 120) and half.info["working_size"] == (53, 64)
+        with pytest.raises(torchsym.errors.InputShapeError, match="image: expected height and width >= 32"):
+            solver(max_side=None)(torch.rand(1, 20, 200, generator=g))
+
+    @pytest.mark.parametrize("bad", [0, 8, 31, 2.5, "640"])
     def test_bad_max_side(self, bad):
         for name in ("boundary_cliques", "ksymmetry"):
             with pytest.raises(torchsym.errors.TorchsymError, match="max_side"):

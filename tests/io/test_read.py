@@ -55,8 +55,19 @@ class TestRead:
         got = read_pointcloud(tmp_path / "a.txt", dtype=torch.float64)
         assert torch.equal(got, torch.from_numpy(pts[:, :3]))
 
+    @pytest.mark.parametrize("content, expected", [
+        (b"1 2 3 # first point\n4 5 6\n", [[1, 2, 3], [4, 5, 6]]),  # a comment, not a header
+        (b"\xef\xbb\xbf1 2 3\n4 5 6\n", [[1, 2, 3], [4, 5, 6]]),  # UTF-8 byte-order mark
+        (b"X;Y;Z\n1,5;2,25;3,75\n4;5;6\n", [[1.5, 2.25, 3.75], [4, 5, 6]]),  # decimal commas
+    ])
+    def test_text_points_conventions(self, tmp_path, content, expected):
+        (tmp_path / "a.xyz").write_bytes(content)
+        got = read_pointcloud(tmp_path / "a.xyz", dtype=torch.float64)
+        assert got.tolist() == expected
+
     @pytest.mark.parametrize("content, message", [
         (b"x y z\n1 2 3\nfour 5 6\n", "cannot read .* as rows of numbers"),  # only the first row may be a header
+        (b"1,,3,0.1\n4,5,6,7\n", "cannot read .* as rows of numbers"),  # an empty field shifts no column
         (b"x y z\n", "holds no points"),
         (b"\xff\xfe\x00binary", "cannot read .* as text"),
     ])

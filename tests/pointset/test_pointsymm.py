@@ -210,6 +210,23 @@ class TestPointSymm:
         warm = point_symm(x, initial=(tilt, -float(tilt @ (q @ (-s.offset * s.normal) + shift))))
         assert math.degrees(float(plane_angle(warm.normal, res.normal))) < 1e-6
 
+    def test_thin_set_is_not_flattened(self):
+        # a slab 5e-5 thick, mirror-symmetric across it, in float32: the thin extent is real
+        # (far above float32 rounding), so the symmetry across it must be found
+        h = torch.rand(1000, 3, generator=gen(0), dtype=DT)
+        h[:, 0], h[:, 1], h[:, 2] = h[:, 0] ** 3, h[:, 1] ** 2, (0.2 + h[:, 2]) * 5e-5
+        m = h.clone()
+        m[:, 2] *= -1
+        res = point_symm(torch.cat([h, m]).float())
+        assert math.degrees(float(plane_angle(res.normal.double(), torch.tensor([0.0, 0.0, 1.0], dtype=DT)))) < 1e-3
+        assert res.score > 0.99
+
+    def test_warm_start_containing_a_flat_set(self):
+        flat = planted(40, 2, 3).points
+        x = torch.cat([flat, torch.full((flat.shape[0], 1), 3.0, dtype=DT)], 1)
+        with pytest.raises(InputValueError, match="initial: expected a plane that cuts the set"):
+            point_symm(x, initial=(torch.tensor([0.0, 0.0, 1.0], dtype=DT), -3.0))
+
     def test_two_points_in_high_dimension(self):
         pts = torch.tensor([[0.0, 1.0, 2.0, 3.0, 4.0], [2.0, 1.0, 0.0, 3.0, 5.0]], dtype=DT)
         res = point_symm(pts)

@@ -35,6 +35,10 @@ from torchsym.errors import InputShapeError
 
 __all__ = ["SiftFeatures", "detect_sift", "mirror_descriptors", "mirror_permutation"]
 
+#: Smallest height and width kornia's scale space takes: below it the Gaussian padding of
+#: its octaves exceeds the image (RuntimeError from inside kornia).
+SIFT_MIN_SIDE = 32
+
 
 @dataclasses.dataclass(frozen=True)
 class SiftFeatures(Result):
@@ -85,7 +89,7 @@ def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeature
         >>> feats.descriptors.shape[1]
         128
     """
-    img = check_image(image, "image", min_size=16)
+    img = check_image(image, "image", min_size=SIFT_MIN_SIDE)
     if img.shape[0] != 1:
         raise InputShapeError(f"image: expected a single image (C, H, W) or (1, C, H, W), got batch {tuple(img.shape)}")
     num_features = check_int(num_features, "num_features", minimum=1)

@@ -270,18 +270,21 @@ class ReflectionAxesBatch(Result):
 
 
 def check_max_side(max_side: Any) -> int | None:
-    """``max_side`` of the image detectors: None or an integer >= 16."""
+    """``max_side`` of the image detectors: None or an integer >= ``SIFT_MIN_SIDE`` (32)."""
     from torchsym.core.checks import check_int
+    from torchsym.features.sift import SIFT_MIN_SIDE
 
-    return None if max_side is None else check_int(max_side, "max_side", minimum=16)
+    return None if max_side is None else check_int(max_side, "max_side", minimum=SIFT_MIN_SIDE)
 
 
 def to_input_pixels(res: ReflectionAxesResult, height: int, width: int) -> ReflectionAxesResult:
     """``res``, found on a resized copy of an image, in the pixels of the ``height x width`` input.
 
-    Pixel centres map to pixel centres (``x = (x' + 0.5) * width / w' - 0.5``), so a segment
-    clipped to the copy's border ends on the input's border; each line ``a x + b y + c = 0``
-    is mapped the same way and renormalised. ``info["working_size"]`` records the copy's size.
+    Pixel centres map to pixel centres (``x = (x' + 0.5) * width / w' - 0.5``, as
+    ``interpolate(align_corners=False)`` samples), so a segment clipped to the copy's
+    border ends within half a copy pixel of the input's border; each line
+    ``a x + b y + c = 0`` is mapped the same way and renormalised.
+    ``info["working_size"]`` records the copy's size.
     """
     h, w = res.image_size
     sx, sy = width / w, height / h
@@ -321,9 +324,15 @@ def run_batched(
     height, width = int(img.shape[-2]), int(img.shape[-1])
     work = img
     if max_side is not None and max(height, width) > max_side:
+        from torchsym.features.sift import SIFT_MIN_SIDE
+
         scale = max_side / max(height, width)
-        size = (max(16, round(height * scale)), max(16, round(width * scale)))
-        work = torch.nn.functional.interpolate(img, size=size, mode="bilinear", align_corners=False, antialias=True).clamp(0, 1)
+        # the short side of a long strip is kept at SIFT's smallest (the scale then differs
+        # per axis; the mapping back handles it)
+        size = tuple(min(side, max(SIFT_MIN_SIDE, round(side * scale))) for side in (height, width))
+        # antialiased resizing exists for float32 and float64 only
+        src = img if img.dtype in (torch.float32, torch.float64) else img.float()
+        work = torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=True).clamp(0, 1)
 
     def one(b: int) -> ReflectionAxesResult:
         res = fn(work[b : b + 1], **settings)

@@ -52,7 +52,7 @@ from torchsym.features.mirror_pairs import (
     mirror_distance_matrix,
     mutual_knn_pairs,
 )
-from torchsym.features.sift import detect_sift
+from torchsym.features.sift import SIFT_MIN_SIDE, detect_sift
 from torchsym.image.axes import (
     EDGE_NOISE,
     ReflectionAxesResult,
@@ -391,7 +391,7 @@ def ksymmetry_axes(
         >>> ksymmetry_axes(img).axes.shape[1]
         4
     """
-    img = check_image(image, "image", min_size=16)
+    img = check_image(image, "image", min_size=SIFT_MIN_SIDE)
     if img.shape[0] != 1:
         raise InputShapeError(f"image: expected one image (C, H, W) or (1, C, H, W), got {tuple(img.shape)}")
     num_features = check_int(num_features, "num_features", minimum=1)

@@ -6,6 +6,7 @@ NumPy; images through OpenCV. Files are only ever opened for reading.
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -61,23 +62,47 @@ def _is_number(token: str) -> bool:
     return True
 
 
+def _strip_comment(line: str) -> str:
+    return line.split("#", 1)[0].split("//", 1)[0].strip()
+
+
 def _read_text_rows(p: Path) -> np.ndarray:
-    """Rows of numbers from a text point file, as scanners and CloudCompare write them:
-    separated by whitespace, commas or semicolons, ``#`` and ``//`` comments, and one
-    header line of column names (``X,Y,Z``) skipped when the first row is not numeric."""
+    """Rows of numbers from a text point file, as scanners and CloudCompare write them.
+
+    Numbers are separated by whitespace, commas or semicolons (decided on the first data
+    row; with semicolons a comma is a decimal mark, the spreadsheet convention), ``#`` and
+    ``//`` start comments, a UTF-8 byte-order mark is skipped, and a first row of column
+    names (``X,Y,Z``) is skipped as a header. Empty fields and later non-numeric rows are
+    errors, never silently dropped.
+    """
     try:
-        lines = p.read_text(encoding="utf-8").splitlines()
+        with open(p, encoding="utf-8-sig") as fh:
+            head: list[str] = []
+            for line in fh:
+                head.append(line)
+                if sum(1 for h in head if _strip_comment(h)) >= 2 or len(head) >= 10000:
+                    break
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"path: cannot read {str(p)!r} as text ({exc})") from None
-    rows = [ln.replace(",", " ").replace(";", " ") for ln in lines]
-    first = next((i for i, ln in enumerate(rows) if ln.strip() and not ln.lstrip().startswith(("#", "//"))), None)
-    if first is not None and not all(_is_number(t) for t in rows[first].split()):
-        rows[first] = ""  # a header of column names
+    data_rows = [i for i, h in enumerate(head) if _strip_comment(h)]
+    if not data_rows:
+        raise InputFileError(f"path: {str(p)!r} holds no points (no rows of numbers)")
+    first = _strip_comment(head[data_rows[0]])
+    header = not all(_is_number(t) for t in re.split(r"[\s,;]+", first) if t)
+    skip = data_rows[0] + 1 if header else 0
+    if header and len(data_rows) < 2:
+        raise InputFileError(f"path: {str(p)!r} holds no points (a header row and no rows of numbers)")
+    sample = _strip_comment(head[data_rows[1] if header else data_rows[0]])
+    delimiter = ";" if ";" in sample else "," if "," in sample else None
+    options: dict[str, Any] = {}
+    if delimiter == ";":
+        options["converters"] = lambda field: float(field.replace(",", "."))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # numpy's "input contained no data"
-            arr = np.loadtxt(rows, ndmin=2, comments=("#", "//"))
-    except ValueError as exc:
+            arr = np.loadtxt(p, delimiter=delimiter, comments=("#", "//"), skiprows=skip, ndmin=2,
+                             encoding="utf-8-sig", **options)
+    except (ValueError, UnicodeDecodeError) as exc:
         raise InputFileError(f"path: cannot read {str(p)!r} as rows of numbers ({exc})") from None
     if arr.size == 0:
         raise InputFileError(f"path: {str(p)!r} holds no points (no rows of numbers)")
@@ -90,7 +115,8 @@ def read_pointcloud(path: str | Path, *, dtype: torch.dtype = torch.float32) -> 
     Mesh formats give their vertices. ``.xyz``/``.txt``/``.pts`` are text with one point
     per row, numbers separated by whitespace, commas or semicolons, ``#`` or ``//``
     comments and an optional header row of column names (extra columns such as normals
-    or colours after the first three are dropped); ``.npy`` must hold a 2-D float array.
+    or colours after the first three are dropped; see :func:`_read_text_rows`); ``.npy``
+    must hold a 2-D float array.
 
     Raises:
         InputFileError: missing, unreadable, or not a point cloud.

@@ -186,16 +186,21 @@ def _reflect(x_np: np.ndarray, var) -> np.ndarray:
     return (x_np - t) @ s.T + t
 
 
-def _hull_basis(centred: np.ndarray, dtype: torch.dtype) -> np.ndarray | None:
+def _hull_basis(raw: np.ndarray, centred: np.ndarray, dtype: torch.dtype) -> np.ndarray | None:
     """``(D, r)`` orthonormal basis of the directions a centred set spans, ``r >= 2``, or None
-    when it spans ``R^D`` (or ``D = 2``). Rank as :func:`numpy.linalg.matrix_rank` counts
-    it, at the input dtype's precision."""
+    when it spans ``R^D`` (or ``D = 2``).
+
+    A direction counts when its singular value exceeds what rounding the input's
+    coordinates to its dtype can make, ``sqrt(N D) eps max|x|`` (the rounding errors'
+    Frobenius norm bounds every singular value they add): a thin but real extent is
+    kept, however many points there are.
+    """
     n, d = centred.shape
     if d <= 2:
         return None
     _, sv, vt = np.linalg.svd(centred, full_matrices=False)
-    rank = int((sv > sv[0] * max(n, d) * torch.finfo(dtype).eps).sum())
-    r = max(rank, 2)
+    noise = math.sqrt(n * d) * torch.finfo(dtype).eps * float(np.abs(raw).max())
+    r = max(int((sv > noise).sum()), 2)
     return None if r >= d else vt[:r].T.copy()
 
 
@@ -371,13 +376,18 @@ def point_symm(
     radius = math.sqrt(float(((x_raw - mu) ** 2).sum(1).mean()))
     if radius == 0.0:
         raise InputValueError(f"points: expected at least two distinct points, got {n} copies of one point")
-    basis = _hull_basis(x_raw - mu, pts.dtype)
+    basis = _hull_basis(x_raw, x_raw - mu, pts.dtype)
     if basis is not None:
         # Every reflection of the set maps its affine hull onto itself: solve inside the hull
         # (exactly as any set given in those coordinates) and lift the plane back.
         sub_initial = None
         if initial is not None:
             n0, q0 = _initial_plane(initial, mu, 1.0, d)  # unit normal; q0 + mu lies on the plane
+            if float(np.linalg.norm(basis.T @ n0)) < 1e-9:
+                raise InputValueError(
+                    "initial: expected a plane that cuts the set, got one whose normal is perpendicular to the "
+                    "flat set's affine hull (a plane containing the whole set mirrors every point onto itself)"
+                )
             sub_initial = (torch.from_numpy(basis.T @ n0), -float(n0 @ q0))
         sub = point_symm(
             torch.from_numpy((x_raw - mu) @ basis), n_runs=n_runs, eps_theta=eps_theta, eps_d=eps_d, max_iter=max_iter,
