@@ -77,3 +77,12 @@ class TestCLI:
         assert names == ["chair_ply.json", "chair_ply_2.json", "chair_xyz.json"]
         inputs = {json.loads((out / n).read_text())["input"] for n in names}
         assert len(inputs) == 3
+
+    def test_unique_stems(self):
+        from pathlib import Path
+
+        from torchsym.cli import _unique_stems
+
+        names = ["a/chair.xyz", "a/chair.npy", "b/chair.xyz", "a/chair_xyz.txt", "a/chair_xyz_2.pts", "a/table.ply"]
+        stems = _unique_stems([Path(n) for n in names])
+        assert len(set(stems)) == len(stems) and stems[-1] == "table" and stems[3:5] == ["chair_xyz", "chair_xyz_2"]

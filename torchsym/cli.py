@@ -55,12 +55,19 @@ def _unique_stems(paths: Sequence[Path]) -> list[str]:
     from collections import Counter
 
     counts = Counter(p.stem for p in paths)
-    stems = [p.stem if counts[p.stem] == 1 else f"{p.stem}_{p.suffix.lstrip('.').lower()}" for p in paths]
-    seen: Counter[str] = Counter()
+    taken = {p.stem for p in paths if counts[p.stem] == 1}
     out = []
-    for stem in stems:
-        seen[stem] += 1
-        out.append(stem if seen[stem] == 1 else f"{stem}_{seen[stem]}")
+    for p in paths:
+        if counts[p.stem] == 1:
+            out.append(p.stem)
+            continue
+        base = f"{p.stem}_{p.suffix.lstrip('.').lower()}"
+        stem, k = base, 1
+        while stem in taken:
+            k += 1
+            stem = f"{base}_{k}"
+        taken.add(stem)
+        out.append(stem)
     return out
 
 

@@ -59,6 +59,8 @@ class TestRead:
         (b"1 2 3 # first point\n4 5 6\n", [[1, 2, 3], [4, 5, 6]]),  # a comment, not a header
         (b"\xef\xbb\xbf1 2 3\n4 5 6\n", [[1, 2, 3], [4, 5, 6]]),  # UTF-8 byte-order mark
         (b"X;Y;Z\n1,5;2,25;3,75\n4;5;6\n", [[1.5, 2.25, 3.75], [4, 5, 6]]),  # decimal commas
+        (b"1,2,3,\n4,5,6,\n", [[1, 2, 3], [4, 5, 6]]),  # a separator ending every row
+        (b"# 5000 comment lines\n" * 5000 + b"1 2 3\n", [[1, 2, 3]]),
     ])
     def test_text_points_conventions(self, tmp_path, content, expected):
         (tmp_path / "a.xyz").write_bytes(content)
@@ -68,6 +70,7 @@ class TestRead:
     @pytest.mark.parametrize("content, message", [
         (b"x y z\n1 2 3\nfour 5 6\n", "cannot read .* as rows of numbers"),  # only the first row may be a header
         (b"1,,3,0.1\n4,5,6,7\n", "cannot read .* as rows of numbers"),  # an empty field shifts no column
+        (b"1 2 3 a\n4 5 6 7\n", "cannot read .* as rows of numbers"),  # a number in it: not a header
         (b"x y z\n", "holds no points"),
         (b"\xff\xfe\x00binary", "cannot read .* as text"),
     ])

@@ -217,15 +217,19 @@ class TestPointSymm:
         h[:, 0], h[:, 1], h[:, 2] = h[:, 0] ** 3, h[:, 1] ** 2, (0.2 + h[:, 2]) * 5e-5
         m = h.clone()
         m[:, 2] *= -1
-        res = point_symm(torch.cat([h, m]).float())
-        assert math.degrees(float(plane_angle(res.normal.double(), torch.tensor([0.0, 0.0, 1.0], dtype=DT)))) < 1e-3
-        assert res.score > 0.99
+        for shift in (0.0, 300.0):  # also far from the origin along another axis
+            x = torch.cat([h, m]) + torch.tensor([shift, 0.0, 0.0], dtype=DT)
+            res = point_symm(x.float())
+            assert math.degrees(float(plane_angle(res.normal.double(), torch.tensor([0.0, 0.0, 1.0], dtype=DT)))) < 1e-3
+            assert res.score > 0.99
 
     def test_warm_start_containing_a_flat_set(self):
         flat = planted(40, 2, 3).points
         x = torch.cat([flat, torch.full((flat.shape[0], 1), 3.0, dtype=DT)], 1)
         with pytest.raises(InputValueError, match="initial: expected a plane that cuts the set"):
             point_symm(x, initial=(torch.tensor([0.0, 0.0, 1.0], dtype=DT), -3.0))
+        with pytest.raises(InputValueError, match="initial: expected a plane that cuts the set"):
+            point_symm(x.float(), initial=(torch.tensor([0.0, 0.0, 1.0]), -3.0))  # float32 rounding of the hull
 
     def test_two_points_in_high_dimension(self):
         pts = torch.tensor([[0.0, 1.0, 2.0, 3.0, 4.0], [2.0, 1.0, 0.0, 3.0, 5.0]], dtype=DT)

@@ -332,7 +332,9 @@ def run_batched(
         size = tuple(min(side, max(SIFT_MIN_SIDE, round(side * scale))) for side in (height, width))
         # antialiased resizing exists for float32 and float64 only
         src = img if img.dtype in (torch.float32, torch.float64) else img.float()
-        work = torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=True).clamp(0, 1)
+        # a triangle filter (non-negative weights): the copy stays within the input's range,
+        # whatever that range is (no clamp to [0, 1])
+        work = torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=True)
 
     def one(b: int) -> ReflectionAxesResult:
         res = fn(work[b : b + 1], **settings)

@@ -70,25 +70,29 @@ def _read_text_rows(p: Path) -> np.ndarray:
     """Rows of numbers from a text point file, as scanners and CloudCompare write them.
 
     Numbers are separated by whitespace, commas or semicolons (decided on the first data
-    row; with semicolons a comma is a decimal mark, the spreadsheet convention), ``#`` and
-    ``//`` start comments, a UTF-8 byte-order mark is skipped, and a first row of column
-    names (``X,Y,Z``) is skipped as a header. Empty fields and later non-numeric rows are
-    errors, never silently dropped.
+    row; with semicolons a comma is a decimal mark, the spreadsheet convention; one
+    separator ending every row is allowed), ``#`` and ``//`` start comments, a UTF-8
+    byte-order mark is skipped, and a first row of column names (``X,Y,Z``; no field a
+    number) is skipped as a header. Empty fields and later non-numeric rows are errors,
+    never silently dropped.
     """
     try:
         with open(p, encoding="utf-8-sig") as fh:
             head: list[str] = []
-            for line in fh:
+            data_rows: list[int] = []
+            for line in fh:  # up to the second data row
+                if _strip_comment(line):
+                    data_rows.append(len(head))
                 head.append(line)
-                if sum(1 for h in head if _strip_comment(h)) >= 2 or len(head) >= 10000:
+                if len(data_rows) >= 2:
                     break
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"path: cannot read {str(p)!r} as text ({exc})") from None
-    data_rows = [i for i, h in enumerate(head) if _strip_comment(h)]
     if not data_rows:
         raise InputFileError(f"path: {str(p)!r} holds no points (no rows of numbers)")
     first = _strip_comment(head[data_rows[0]])
-    header = not all(_is_number(t) for t in re.split(r"[\s,;]+", first) if t)
+    # a header names every column: no token of it is a number
+    header = not any(_is_number(t) for t in re.split(r"[\s,;]+", first) if t)
     skip = data_rows[0] + 1 if header else 0
     if header and len(data_rows) < 2:
         raise InputFileError(f"path: {str(p)!r} holds no points (a header row and no rows of numbers)")
@@ -97,6 +101,8 @@ def _read_text_rows(p: Path) -> np.ndarray:
     options: dict[str, Any] = {}
     if delimiter == ";":
         options["converters"] = lambda field: float(field.replace(",", "."))
+    if delimiter is not None and sample.endswith(delimiter):  # rows ending in a separator
+        options["usecols"] = range(sample.count(delimiter))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # numpy's "input contained no data"

@@ -190,16 +190,18 @@ def _hull_basis(raw: np.ndarray, centred: np.ndarray, dtype: torch.dtype) -> np.
     """``(D, r)`` orthonormal basis of the directions a centred set spans, ``r >= 2``, or None
     when it spans ``R^D`` (or ``D = 2``).
 
-    A direction counts when its singular value exceeds what rounding the input's
-    coordinates to its dtype can make, ``sqrt(N D) eps max|x|`` (the rounding errors'
-    Frobenius norm bounds every singular value they add): a thin but real extent is
-    kept, however many points there are.
+    A direction ``v`` counts when its singular value exceeds what rounding the input's
+    coordinates to its dtype can put along it, ``4 eps |(|X| |v|)|`` (each coordinate
+    rounded by at most ``eps |x| / 2``, margin 8): a thin but real extent is kept however
+    many points there are and wherever the set lies, and a set that is flat up to the
+    rounding of its coordinates (float32 data far from the origin) is reduced.
+    ``centred`` must be centred twice (the mean's own rounding adds a direction).
     """
     n, d = centred.shape
     if d <= 2:
         return None
     _, sv, vt = np.linalg.svd(centred, full_matrices=False)
-    noise = math.sqrt(n * d) * torch.finfo(dtype).eps * float(np.abs(raw).max())
+    noise = 4.0 * torch.finfo(dtype).eps * np.linalg.norm(np.abs(raw) @ np.abs(vt.T), axis=0)
     r = max(int((sv > noise).sum()), 2)
     return None if r >= d else vt[:r].T.copy()
 
@@ -376,14 +378,15 @@ def point_symm(
     radius = math.sqrt(float(((x_raw - mu) ** 2).sum(1).mean()))
     if radius == 0.0:
         raise InputValueError(f"points: expected at least two distinct points, got {n} copies of one point")
-    basis = _hull_basis(x_raw, x_raw - mu, pts.dtype)
+    centred = x_raw - mu
+    basis = _hull_basis(x_raw, centred - centred.mean(0), pts.dtype)
     if basis is not None:
         # Every reflection of the set maps its affine hull onto itself: solve inside the hull
         # (exactly as any set given in those coordinates) and lift the plane back.
         sub_initial = None
         if initial is not None:
             n0, q0 = _initial_plane(initial, mu, 1.0, d)  # unit normal; q0 + mu lies on the plane
-            if float(np.linalg.norm(basis.T @ n0)) < 1e-9:
+            if float(np.linalg.norm(basis.T @ n0)) < 10.0 * math.sqrt(torch.finfo(pts.dtype).eps):
                 raise InputValueError(
                     "initial: expected a plane that cuts the set, got one whose normal is perpendicular to the "
                     "flat set's affine hull (a plane containing the whole set mirrors every point onto itself)"
