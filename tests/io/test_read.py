@@ -61,6 +61,7 @@ class TestRead:
         (b"X;Y;Z\n1,5;2,25;3,75\n4;5;6\n", [[1.5, 2.25, 3.75], [4, 5, 6]]),  # decimal commas
         (b"1,2,3,\n4,5,6,\n", [[1, 2, 3], [4, 5, 6]]),  # a separator ending every row
         (b"# 5000 comment lines\n" * 5000 + b"1 2 3\n", [[1, 2, 3]]),
+        (b"2\n1 2 3 -120 10 20 30\n4 5 6 -80 10 20 30\n", [[1, 2, 3], [4, 5, 6]]),  # Leica .pts: the count first
     ])
     def test_text_points_conventions(self, tmp_path, content, expected):
         (tmp_path / "a.xyz").write_bytes(content)

@@ -73,7 +73,7 @@ def _read_text_rows(p: Path) -> np.ndarray:
     row; with semicolons a comma is a decimal mark, the spreadsheet convention; one
     separator ending every row is allowed), ``#`` and ``//`` start comments, a UTF-8
     byte-order mark is skipped, and a first row of column names (``X,Y,Z``; no field a
-    number) is skipped as a header. Empty fields and later non-numeric rows are errors,
+    number) or of the point count alone (Leica ``.pts``) is skipped as a header. Empty fields and later non-numeric rows are errors,
     never silently dropped.
     """
     try:
@@ -91,8 +91,13 @@ def _read_text_rows(p: Path) -> np.ndarray:
     if not data_rows:
         raise InputFileError(f"path: {str(p)!r} holds no points (no rows of numbers)")
     first = _strip_comment(head[data_rows[0]])
-    # a header names every column: no token of it is a number
-    header = not any(_is_number(t) for t in re.split(r"[\s,;]+", first) if t)
+    tokens = [t for t in re.split(r"[\s,;]+", first) if t]
+    # a header names every column: no token of it is a number; Leica's .pts starts with
+    # the number of points alone on its line
+    header = not any(_is_number(t) for t in tokens) or (
+        len(tokens) == 1 and tokens[0].isdigit() and len(data_rows) > 1
+        and len(_strip_comment(head[data_rows[1]]).split()) >= 3
+    )
     skip = data_rows[0] + 1 if header else 0
     if header and len(data_rows) < 2:
         raise InputFileError(f"path: {str(p)!r} holds no points (a header row and no rows of numbers)")
