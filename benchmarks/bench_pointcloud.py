@@ -200,13 +200,14 @@ def main(argv=None) -> int:
         print("open3d is not installed: the pca+icp baseline is skipped (pip install open3d)", file=sys.stderr)
 
     cases = make_cases(args.data, args.n, args.planes, args.seed)
-    posed = make_cases(args.data, args.n, args.planes, args.seed, thesis_pose=True)
     print(f"{len(cases)} mirror-completed clouds of ~{args.n} points from {args.data}")
     rows = []
     protocols = {k: (key, levels[:: 2] if args.quick else levels) for k, (key, levels) in PROTOCOLS.items()}
     if args.timing_only:
         rows = json.loads((args.out / "pointcloud.json").read_text())["rows"]
         protocols = {}
+    posed = make_cases(args.data, args.n, args.planes, args.seed, thesis_pose=True) if any(
+        key == "wt" for key, _ in protocols.values()) else []
     for proto, (key, levels) in protocols.items():
         for level in levels:
             for mname, method in methods.items():

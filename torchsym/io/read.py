@@ -73,8 +73,8 @@ def _read_text_rows(p: Path) -> np.ndarray:
     row; with semicolons a comma is a decimal mark, the spreadsheet convention; one
     separator ending every row is allowed), ``#`` and ``//`` start comments, a UTF-8
     byte-order mark is skipped, and a first row of column names (``X,Y,Z``; no field a
-    number) or of the point count alone (Leica ``.pts``) is skipped as a header. Empty fields and later non-numeric rows are errors,
-    never silently dropped.
+    number) or of the point count alone (Leica ``.pts``) is skipped as a header. Empty
+    fields and later non-numeric rows are errors, never silently dropped.
     """
     try:
         with open(p, encoding="utf-8-sig") as fh:

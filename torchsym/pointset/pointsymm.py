@@ -375,10 +375,10 @@ def point_symm(
     x_raw = pts.detach().to("cpu", torch.float64).numpy()
     n, d = x_raw.shape
     mu = x_raw.mean(0)
-    radius = math.sqrt(float(((x_raw - mu) ** 2).sum(1).mean()))
+    centred = x_raw - mu
+    radius = math.sqrt(float((centred**2).sum(1).mean()))
     if radius == 0.0:
         raise InputValueError(f"points: expected at least two distinct points, got {n} copies of one point")
-    centred = x_raw - mu
     basis = _hull_basis(x_raw, centred - centred.mean(0), pts.dtype)
     if basis is not None:
         # Every reflection of the set maps its affine hull onto itself: solve inside the hull
@@ -393,13 +393,13 @@ def point_symm(
                 )
             sub_initial = (torch.from_numpy(basis.T @ n0), -float(n0 @ q0))
         sub = point_symm(
-            torch.from_numpy((x_raw - mu) @ basis), n_runs=n_runs, eps_theta=eps_theta, eps_d=eps_d, max_iter=max_iter,
+            torch.from_numpy(centred @ basis), n_runs=n_runs, eps_theta=eps_theta, eps_d=eps_d, max_iter=max_iter,
             match_fraction=match_fraction, assignment=assignment, n_neighbors=n_neighbors,
             exact_max_points=exact_max_points, n_starts=n_starts, n_scan=n_scan, n_scan_starts=n_scan_starts,
             init=init, initial=sub_initial, generator=generator,
         )
         return _lift(sub, basis, mu, out_dtype, device)
-    xn = (x_raw - mu) / radius  # (N, D) centred, unit RMS radius
+    xn = centred / radius  # (N, D) centred, unit RMS radius
     rng = numpy_rng(make_generator(generator))
     tree = cKDTree(xn)
     nn_dist, _ = tree.query(xn, k=2)
