@@ -41,7 +41,7 @@ class TestLoadConfig:
         with pytest.raises(ConfigError) as err:
             load_config({"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_start": 2}}]})
         msg = str(err.value)
-        assert "unknown parameter 'n_start'" in msg and "did you mean 'n_starts'" in msg and "valid parameters:" in msg
+        assert "n_start: unknown setting" in msg and "did you mean 'n_starts'" in msg and "valid:" in msg
 
     def test_bad_kind(self):
         with pytest.raises(ConfigError, match="'input' must be one of"):
@@ -67,7 +67,7 @@ class TestLoadConfig:
 
     def test_overrides_checked(self):
         cfg = default_config("pointcloud")
-        with pytest.raises(ConfigError, match="unknown parameter 'bogus'"):
+        with pytest.raises(ConfigError, match="bogus: unknown setting"):
             cfg.with_overrides({"bogus": 1})
 
     def test_detect_with_overrides(self):

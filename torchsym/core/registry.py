@@ -1,7 +1,7 @@
 """A small registry of solvers by short name (after fvcore's).
 
-A solver is an ``nn.Module`` whose constructor takes only keyword settings with defaults
-and whose ``forward`` takes the input (a point tensor, an image tensor, a mesh, or the
+A solver is a :class:`~torchsym.core.settings.Solver` (an ``nn.Module`` holding one
+frozen :class:`~torchsym.core.settings.Settings` dataclass) whose ``forward`` takes the input (a point tensor, an image tensor, a mesh, or the
 previous step's output) and returns a :class:`~torchsym.core.results.Result`.
 
     @register_solver("reflection_plane", kind="pointcloud", default=True)
@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+from collections.abc import Mapping
 from typing import Any, Callable, TypeVar
 
+from torchsym.core.settings import Settings, Solver
 from torchsym.errors import ConfigError
 
 __all__ = ["INPUT_KINDS", "Registry", "SOLVERS", "SolverEntry", "register_solver"]
@@ -43,18 +45,37 @@ class SolverEntry:
     kind: str
     summary: str
 
-    def parameters(self) -> dict[str, inspect.Parameter]:
-        """The constructor's keyword parameters by name (``self`` left out)."""
-        sig = inspect.signature(self.cls.__init__)
-        return {
-            k: p
-            for k, p in sig.parameters.items()
-            if k != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
-        }
+    @property
+    def settings_class(self) -> type[Settings]:
+        """The solver's :class:`~torchsym.core.settings.Settings` class."""
+        if issubclass(self.cls, Solver):
+            return self.cls.settings_class
+        return _legacy_settings(self.cls)  # TRANSITION: removed once every solver is a Solver
+
+    def parameters(self) -> list[str]:
+        """The names of the solver's top-level settings (groups by their own name)."""
+        return self.settings_class.field_names()
 
     def defaults(self) -> dict[str, Any]:
-        """The constructor's default settings."""
-        return {k: p.default for k, p in self.parameters().items() if p.default is not inspect.Parameter.empty}
+        """The solver's default settings, nested as a YAML step's ``params``."""
+        return self.settings_class().to_dict()
+
+    def settings(self, params: Mapping[str, Any] | None = None, *, where: str = "") -> Settings:
+        """The settings a YAML step's ``params`` give (checked; typos name the valid keys)."""
+        try:
+            return self.settings_class.from_dict(params or {}, where="params")
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: solver {self.name!r}: {exc}" if where else f"solver {self.name!r}: {exc}") from None
+
+
+def _legacy_settings(cls: type) -> type[Settings]:
+    sig = inspect.signature(cls.__init__)
+    fields = [
+        (k, Any, dataclasses.field(default=p.default))
+        for k, p in sig.parameters.items()
+        if k != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty
+    ]
+    return dataclasses.make_dataclass(f"{cls.__name__}Settings", fields, bases=(Settings,), frozen=True)
 
 
 class Registry:
