@@ -125,7 +125,9 @@ def _write_outputs(
     except OSError as exc:
         raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
     try:
-        names = [Path(q).name for q in result.write_artifacts(data, staging, stem)] if figures else []
+        from torchsym.viz import write_artifacts
+
+        names = [Path(q).name for q in write_artifacts(result, data, staging, stem)] if figures else []
         record["artifacts"] = [str(out / name) for name in names]
         (staging / f"{stem}.json").write_text(json.dumps(record, indent=2))
         names.insert(0, f"{stem}.json")
