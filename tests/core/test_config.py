@@ -4,6 +4,7 @@ import pytest
 
 import torchsym
 from torchsym.core.config import build_pipeline, default_config, load_config
+from torchsym.core.config import load_yaml
 from torchsym.errors import ConfigError, InputFileError
 
 CONFIGS = sorted((Path(__file__).resolve().parents[2] / "configs").glob("*.yaml"))
@@ -62,8 +63,28 @@ class TestLoadConfig:
     def test_bad_yaml(self, tmp_path):
         p = tmp_path / "bad.yaml"
         p.write_text("input: [unclosed")
-        with pytest.raises(InputFileError, match="is not valid YAML"):
+        with pytest.raises(ConfigError, match="not valid YAML"):
             load_config(p)
+
+    def test_billion_laughs_refused_quickly(self, tmp_path):
+        lines = ['a: &a ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]']
+        for i, c in enumerate("bcdefghi"):
+            prev = "abcdefghi"[i]
+            lines.append(f"{c}: &{c} [" + ",".join([f"*{prev}"] * 9) + "]")
+        p = tmp_path / "laughs.yaml"
+        p.write_text("input: pointcloud\ndescription:\n" + "\n".join("  " + x for x in lines) + "\nsteps: [reflection_plane]\n")
+        with pytest.raises(ConfigError, match="more than 16 aliases"):
+            load_config(p)
+
+    def test_deep_nesting_refused(self, tmp_path):
+        p = tmp_path / "deep.yaml"
+        p.write_text("input: pointcloud\nsteps: [reflection_plane]\ndescription: " + "[" * 5000 + "]" * 5000 + "\n")
+        with pytest.raises(ConfigError, match="nested deeper than 32"):
+            load_config(p)
+
+    def test_a_few_aliases_allowed(self):
+        assert load_yaml("x: &x 3\ny: *x\n", "t") == {"x": 3, "y": 3}
+
 
     def test_overrides_checked(self):
         cfg = default_config("pointcloud")

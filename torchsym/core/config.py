@@ -28,10 +28,65 @@ from torchsym.core.registry import INPUT_KINDS, SOLVERS, SolverEntry
 from torchsym.core.settings import Solver
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 
-__all__ = ["Pipeline", "PipelineConfig", "StepConfig", "build_pipeline", "default_config", "load_config"]
+__all__ = ["Pipeline", "PipelineConfig", "StepConfig", "build_pipeline", "default_config", "load_config", "load_yaml"]
 
 _TOP_KEYS = {"input", "steps", "description"}
 _STEP_KEYS = {"name", "params"}
+
+#: at most this many YAML aliases (``*name``) in one text: a config needs none, and a
+#: chain of aliases to aliases grows exponentially when expanded ("billion laughs")
+MAX_ALIASES = 16
+#: at most this many nested collections
+MAX_DEPTH = 32
+#: at most this many characters
+MAX_CHARS = 1_000_000
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses more than :data:`MAX_ALIASES` aliases and more
+    than :data:`MAX_DEPTH` nested collections, as it composes the document."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self._aliases = 0
+        self._depth = 0
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        if self.check_event(yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                raise _Refused(f"more than {MAX_ALIASES} aliases (*name)")
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise _Refused(f"collections nested deeper than {MAX_DEPTH}")
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+class _Refused(Exception):
+    pass
+
+
+def load_yaml(text: str, where: str) -> Any:
+    """Parse YAML ``text`` safely: ``yaml.safe_load`` with bounded aliases, depth and size.
+
+    Raises:
+        ConfigError: invalid YAML, or past a bound; the message starts with ``where``
+            (e.g. ``config`` or ``--set``).
+    """
+    if len(text) > MAX_CHARS:
+        raise ConfigError(f"{where}: more than {MAX_CHARS} characters of YAML")
+    loader = _BoundedLoader(text)
+    try:
+        return loader.get_single_data()
+    except _Refused as exc:
+        raise ConfigError(f"{where}: refused YAML with {exc}") from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{where}: not valid YAML ({' '.join(str(exc).split())})") from None
+    finally:
+        loader.dispose()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,8 +143,8 @@ def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
     """Read and validate a config from a YAML file path or a mapping.
 
     Raises:
-        InputFileError: the file does not exist or is not valid YAML.
-        ConfigError: unknown keys, unknown solver names or parameters, bad types.
+        InputFileError: the file does not exist or cannot be read as text.
+        ConfigError: not valid YAML (or past the bounds of :func:`load_yaml`), unknown keys, unknown solver names or parameters, bad types.
     """
     source = "<dict>"
     if isinstance(config, (str, Path)):
@@ -98,9 +153,10 @@ def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
         if not path.is_file():
             raise InputFileError(f"config: file {str(path)!r} does not exist")
         try:
-            raw = yaml.safe_load(path.read_text())
-        except (yaml.YAMLError, UnicodeDecodeError) as exc:
-            raise InputFileError(f"config: {str(path)!r} is not valid YAML ({exc})") from None
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputFileError(f"config: cannot read {str(path)!r} as text ({exc})") from None
+        raw = load_yaml(text, f"config {str(path)!r}")
     else:
         raw = config
     if not isinstance(raw, Mapping):

@@ -133,7 +133,9 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
                 return _coerce(value, a, meta, path)
             except ConfigError:
                 pass
-        raise ConfigError(f"{path}: expected {_describe(hint)}{_with_range(meta)}, got {value!r}")
+        kinds = " or ".join(_describe(a) for a in args if a is not type(None))
+        null = " or null" if type(None) in args else ""
+        raise ConfigError(f"{path}: expected {kinds}{_with_range(meta)}{null}, got {value!r}")
     if origin is Literal:
         if any(value == a and type(value) is type(a) for a in get_args(hint)):
             return value
