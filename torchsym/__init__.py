@@ -8,7 +8,7 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from torchsym import data, geometry, image, io, mesh, metrics, pointcloud, pointset
+from torchsym import data, geometry, image, io, mesh, metrics, multiview, pointcloud, pointset
 from torchsym.api import detect
 from torchsym.core.config import Pipeline, PipelineConfig, build_pipeline, load_config
 from torchsym.core.registry import SOLVERS, register_solver

@@ -30,6 +30,7 @@ INPUT_KINDS: dict[str, str] = {
     "points": "a d-dimensional point set, (N, D) float, D >= 2",
     "image": "an image, (B, C, H, W) float in [0, 1]",
     "mesh": "a triangle mesh (torchsym.mesh.Mesh)",
+    "multiview": "photos of one scene from several viewpoints (a folder or a list of paths)",
     "any": "the previous step's output",
 }
 

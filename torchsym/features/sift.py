@@ -31,7 +31,7 @@ import torch
 
 from torchsym.core.checks import check_image, check_int
 from torchsym.core.results import Result
-from torchsym.errors import InputShapeError
+from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = ["SiftFeatures", "detect_sift", "mirror_descriptors", "mirror_permutation"]
 
@@ -109,26 +109,38 @@ def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeature
 
 
 @functools.lru_cache(maxsize=8)
-def mirror_permutation(num_ang_bins: int = 8, num_spatial_bins: int = 4) -> torch.Tensor:
-    """Index permutation taking a kornia SIFT descriptor to its mirrored descriptor.
+def mirror_permutation(num_ang_bins: int = 8, num_spatial_bins: int = 4, layout: str = "kornia") -> torch.Tensor:
+    """Index permutation taking a SIFT descriptor to its mirrored descriptor.
 
     ``mirrored = descriptor[..., mirror_permutation()]`` is the descriptor of the patch
     flipped about the keypoint's orientation axis (thesis Sec. 2.2.1, Loy & Eklundh): orientation
     plane ``o -> (-o) mod num_ang_bins``, spatial row ``r -> num_spatial_bins - 1 - r``,
     column unchanged. The permutation is an involution.
 
+    Args:
+        num_ang_bins: orientation bins per cell.
+        num_spatial_bins: cells per side.
+        layout: ``"kornia"`` (bins flattened as ``o * 16 + r * 4 + c``) or ``"opencv"``
+            (``(r * 4 + c) * 8 + o``: OpenCV's, COLMAP's and VLFeat's SIFT).
+
     Returns:
         ``(num_ang_bins * num_spatial_bins**2,)`` int64 indices.
     """
+    if layout not in ("kornia", "opencv"):
+        raise InputValueError(f"layout: expected 'kornia' or 'opencv', got {layout!r}")
     o = torch.arange(num_ang_bins)
     r = torch.arange(num_spatial_bins)
     c = torch.arange(num_spatial_bins)
-    oo, rr, cc = torch.meshgrid((-o) % num_ang_bins, num_spatial_bins - 1 - r, c, indexing="ij")
-    return (oo * num_spatial_bins**2 + rr * num_spatial_bins + cc).reshape(-1)
+    if layout == "kornia":
+        oo, rr, cc = torch.meshgrid((-o) % num_ang_bins, num_spatial_bins - 1 - r, c, indexing="ij")
+        return (oo * num_spatial_bins**2 + rr * num_spatial_bins + cc).reshape(-1)
+    rr, cc, oo = torch.meshgrid(num_spatial_bins - 1 - r, c, (-o) % num_ang_bins, indexing="ij")
+    return ((rr * num_spatial_bins + cc) * num_ang_bins + oo).reshape(-1)
 
 
-def mirror_descriptors(descriptors: torch.Tensor) -> torch.Tensor:
-    """Mirrored SIFT descriptors ``(..., 128)`` of ``(..., 128)`` kornia SIFT descriptors."""
+def mirror_descriptors(descriptors: torch.Tensor, *, layout: str = "kornia") -> torch.Tensor:
+    """Mirrored SIFT descriptors ``(..., 128)`` of ``(..., 128)`` SIFT descriptors in
+    ``layout`` (see :func:`mirror_permutation`)."""
     if descriptors.dim() < 1 or descriptors.shape[-1] != 128:
-        raise InputShapeError(f"descriptors: expected (..., 128) kornia SIFT descriptors, got {tuple(descriptors.shape)}")
-    return descriptors[..., mirror_permutation().to(descriptors.device)]
+        raise InputShapeError(f"descriptors: expected (..., 128) SIFT descriptors, got {tuple(descriptors.shape)}")
+    return descriptors[..., mirror_permutation(layout=layout).to(descriptors.device)]
