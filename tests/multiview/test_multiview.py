@@ -35,8 +35,8 @@ def result(scene):
 
 
 def _errors(result, scene):
-    idx = [int(n.split("_")[1].split(".")[0]) for n in result.image_names]
-    src = camera_centers(result.rotations, result.translations)
+    idx = [int(n.split("_")[1].split(".")[0]) for n in result.cameras.image_names]
+    src = camera_centers(result.cameras.rotations, result.cameras.translations)
     dst = camera_centers(scene.rotations[idx], scene.translations[idx])
     n, b = transform_plane(result.normal, result.offset, *align_cameras(src, dst))
     return plane_errors(n, b, scene.normal, scene.offset, torch.tensor([0.0, 0.0, 0.4], dtype=torch.float64))
@@ -121,7 +121,7 @@ class TestDetectMultiviewPlane:
         assert result.found and result.score > 0.9
         angle, offset = _errors(result, scene)
         assert angle < 0.5 and offset < 0.02  # the facade is 4 units wide
-        assert len(result.image_names) == 6 and result.points.shape[1] == 3
+        assert len(result.cameras.image_names) == 6 and result.points.shape[1] == 3
         json.dumps(result.to_dict(), allow_nan=False)
 
     def test_no_symmetry_reported(self):

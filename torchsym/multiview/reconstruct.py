@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from torchsym.errors import InputFileError, SolverError
+from torchsym.multiview.result import Cameras
 from torchsym.multiview.settings import ReconstructionSettings
 from torchsym.multiview.views import Views
 
@@ -38,11 +39,7 @@ class SparseModel:
         colors: ``(M, 3)`` uint8 RGB colours.
         descriptors: ``(M, 128)`` float32 mean SIFT descriptor of each point's
             observations, in COLMAP's layout (4 x 4 cells of 8 orientation bins).
-        image_names: names of the registered photos, in camera order.
-        intrinsics: ``(C, 3, 3)`` calibration matrices of the registered photos.
-        rotations: ``(C, 3, 3)`` camera-from-world rotations.
-        translations: ``(C, 3)`` camera-from-world translations.
-        sizes: ``(C, 2)`` photo width and height in pixels.
+        cameras: the registered photos' cameras.
         n_photos: photos given.
         reconstruction: the ``pycolmap.Reconstruction`` (for writing in COLMAP's format).
         timings: seconds per stage (``features``, ``matching``, ``mapping``, ``descriptors``).
@@ -51,11 +48,7 @@ class SparseModel:
     points: torch.Tensor
     colors: torch.Tensor
     descriptors: torch.Tensor
-    image_names: list[str]
-    intrinsics: torch.Tensor
-    rotations: torch.Tensor
-    translations: torch.Tensor
-    sizes: torch.Tensor
+    cameras: Cameras
     n_photos: int
     reconstruction: Any
     timings: dict[str, float]
@@ -149,11 +142,13 @@ def reconstruct(views: Views, settings: ReconstructionSettings, seed: int) -> Sp
         points=torch.from_numpy(pts),
         colors=torch.from_numpy(cols),
         descriptors=torch.from_numpy(desc),
-        image_names=[im.name for im in images],
-        intrinsics=torch.from_numpy(np.stack([im.camera.calibration_matrix() for im in images])),
-        rotations=torch.from_numpy(np.stack([p.rotation.matrix() for p in poses])),
-        translations=torch.from_numpy(np.stack([np.asarray(p.translation) for p in poses])),
-        sizes=torch.tensor([[im.camera.width, im.camera.height] for im in images]),
+        cameras=Cameras(
+            image_names=[im.name for im in images],
+            intrinsics=torch.from_numpy(np.stack([im.camera.calibration_matrix() for im in images])),
+            rotations=torch.from_numpy(np.stack([p.rotation.matrix() for p in poses])),
+            translations=torch.from_numpy(np.stack([np.asarray(p.translation) for p in poses])),
+            sizes=torch.tensor([[im.camera.width, im.camera.height] for im in images]),
+        ),
         n_photos=len(names),
         reconstruction=rec,
         timings=timings,

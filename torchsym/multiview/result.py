@@ -9,7 +9,26 @@ import torch
 
 from torchsym.core.results import Result
 
-__all__ = ["MultiviewPlaneResult"]
+__all__ = ["Cameras", "MultiviewPlaneResult"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Cameras(Result):
+    """The registered photos' cameras (pinhole, COLMAP's camera-from-world convention).
+
+    Attributes:
+        image_names: the photos' names, in camera order.
+        intrinsics: ``(C, 3, 3)`` calibration matrices (pixels).
+        rotations: ``(C, 3, 3)`` camera-from-world rotations.
+        translations: ``(C, 3)`` camera-from-world translations.
+        sizes: ``(C, 2)`` photo width and height in pixels.
+    """
+
+    image_names: list[str]
+    intrinsics: torch.Tensor
+    rotations: torch.Tensor
+    translations: torch.Tensor
+    sizes: torch.Tensor
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,12 +49,8 @@ class MultiviewPlaneResult(Result):
         colors: ``(M, 3)`` uint8 their colours.
         pairs: ``(S, 2)`` int64 mirror symmetric point pairs (indices into ``points``).
         inliers: ``(S,)`` bool, the pairs that support the plane.
-        image_names: the registered photos, in camera order.
-        intrinsics: ``(C, 3, 3)`` their calibration matrices (pixels).
-        rotations: ``(C, 3, 3)`` camera-from-world rotations.
-        translations: ``(C, 3)`` camera-from-world translations.
-        sizes: ``(C, 2)`` photo width and height in pixels.
-        n_photos: photos given (``len(image_names)`` of them were registered).
+        cameras: the registered photos' :class:`Cameras`.
+        n_photos: photos given (``len(cameras.image_names)`` of them were registered).
         notes: what the caller should know (e.g. why no symmetry was reported).
         timings: seconds per stage (``features``, ``matching``, ``mapping``,
             ``descriptors``, ``pairs``, ``plane``, ``total``).
@@ -52,11 +67,7 @@ class MultiviewPlaneResult(Result):
     colors: torch.Tensor
     pairs: torch.Tensor
     inliers: torch.Tensor
-    image_names: list[str]
-    intrinsics: torch.Tensor
-    rotations: torch.Tensor
-    translations: torch.Tensor
-    sizes: torch.Tensor
+    cameras: Cameras
     n_photos: int
     notes: list[str]
     timings: dict[str, float]

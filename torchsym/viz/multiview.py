@@ -34,9 +34,9 @@ def _photo(views: Any, name: str, index: int) -> np.ndarray | None:
 def _project(result: MultiviewPlaneResult, cam: int, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates ``(N, 2)`` of world points ``x (N, 3)`` in camera ``cam`` and
     whether each lies in front of it."""
-    r = result.rotations[cam].double().numpy()
-    t = result.translations[cam].double().numpy()
-    k = result.intrinsics[cam].double().numpy()
+    r = result.cameras.rotations[cam].double().numpy()
+    t = result.cameras.translations[cam].double().numpy()
+    k = result.cameras.intrinsics[cam].double().numpy()
     c = x @ r.T + t
     uv = c @ k.T
     return uv[:, :2] / np.maximum(uv[:, 2:], 1e-9), c[:, 2] > 1e-6
@@ -54,11 +54,11 @@ def draw_plane_in_photos(
         inl = inl[np.linspace(0, len(inl) - 1, max_pairs).astype(int)]
     support = pts[torch.from_numpy(np.unique(inl))] if len(inl) else pts
     tiles = []
-    for cam, name in enumerate(result.image_names[:max_photos]):
+    for cam, name in enumerate(result.cameras.image_names[:max_photos]):
         img = _photo(views, name, cam)
         if img is None:
             continue
-        w, h = (int(s) for s in result.sizes[cam])
+        w, h = (int(s) for s in result.cameras.sizes[cam])
         img = cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA) if img.shape[1] != w else img
         if result.found:
             quad = plane_quad(support, result.normal, result.offset)
