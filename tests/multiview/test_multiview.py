@@ -184,3 +184,16 @@ class TestAlignCameras:
         dst = 2.5 * src @ q.T + torch.tensor([1.0, -2.0, 0.5], dtype=torch.float64)
         s, r, t = align_cameras(src, dst)
         assert abs(float(s) - 2.5) < 1e-9 and torch.allclose(r, q) and torch.allclose(2.5 * src @ r.T + t, dst)
+
+
+def test_votes_equal_the_table():
+    g = torch.Generator().manual_seed(4)
+    normal = torch.nn.functional.normalize(torch.randn(3, generator=g, dtype=torch.float64), dim=0)
+    left = torch.randn(300, 3, generator=g, dtype=torch.float64)
+    right = torch.randn(300, 3, generator=g, dtype=torch.float64)
+    right[:100] = reflect_points(left[:100], normal, torch.tensor(0.1, dtype=torch.float64))
+    from torchsym.multiview.plane import plane_votes
+
+    n, b = pair_planes(left, right)
+    table = inlier_table(left, right, n, b, 0.04, 1.0)
+    assert torch.equal(plane_votes(left, right, n, b, 0.04, 1.0), table.sum(1))

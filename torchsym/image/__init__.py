@@ -3,12 +3,16 @@
 from torchsym.image.axes import ReflectionAxesBatch, ReflectionAxesResult
 from torchsym.image.boundary_cliques import BoundaryCliqueDetector, boundary_clique_axes
 from torchsym.image.ksymmetry import KSymmetryDetector, ksymmetry_axes
+from torchsym.image.symmslic import SymmSlic, SymmSlicResult, symm_slic
 
 __all__: list[str] = [
     "BoundaryCliqueDetector",
     "KSymmetryDetector",
     "ReflectionAxesBatch",
     "ReflectionAxesResult",
+    "SymmSlic",
+    "SymmSlicResult",
     "boundary_clique_axes",
     "ksymmetry_axes",
+    "symm_slic",
 ]

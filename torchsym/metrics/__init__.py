@@ -6,3 +6,4 @@ from torchsym.metrics.pointset import *  # noqa: F401,F403
 from torchsym.metrics.mesh import *  # noqa: F401,F403
 from torchsym.metrics.axes import *  # noqa: F401,F403
 from torchsym.metrics.multiview import *  # noqa: F401,F403
+from torchsym.metrics.superpixels import *  # noqa: F401,F403

@@ -26,10 +26,11 @@ import dataclasses
 import math
 
 import torch
+import torch.nn.functional as F
 
 from torchsym.geometry.reflection import canonical_sign, plane_from_pairs
 
-__all__ = ["Consensus", "consensus_plane", "inlier_table", "pair_planes"]
+__all__ = ["Consensus", "consensus_plane", "inlier_table", "pair_planes", "plane_votes"]
 
 #: planes scored at once
 CHUNK = 1024
@@ -43,24 +44,46 @@ def pair_planes(left: torch.Tensor, right: torch.Tensor) -> tuple[torch.Tensor, 
     return n, b
 
 
+def _centred(left, right, normals, offsets):
+    """Pairs and planes in float32 coordinates centred at the pairs' mean."""
+    centre = 0.5 * (left + right).double().mean(0)
+    offsets = (offsets.double() + normals.double() @ centre).float()
+    return (left.double() - centre).float(), (right.double() - centre).float(), normals.float(), offsets
+
+
+def _inlier(left, right, n, b, eps_d):
+    """Sec. 5.3.4's side and distance-ratio tests for pairs against planes, elementwise."""
+    rl = (left * n).sum(-1) + b
+    rr = (right * n).sum(-1) + b
+    ratio = rl.abs() / rr.abs().clamp_min(torch.finfo(rr.dtype).tiny)
+    return (rl * rr < 0) & (ratio > 1 - eps_d) & (ratio < 1 + eps_d)
+
+
 def inlier_table(
     left: torch.Tensor, right: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, eps_d: float, eps_theta: float
 ) -> torch.Tensor:
     """``(K, S)`` bool: pair ``i`` is an inlier of plane ``k`` (Sec. 5.3.4's test)."""
-    u = right - left
-    u_unit = u / u.norm(dim=1, keepdim=True)  # (S, 3)
+    left, right, normals, offsets = _centred(left, right, normals, offsets)
+    u = F.normalize(right - left, dim=1)  # (S, 3)
+    along = (normals @ u.T).abs() > math.cos(math.radians(eps_theta))  # (K, S)
+    return along & _inlier(left[None], right[None], normals[:, None], offsets[:, None], eps_d)
+
+
+def plane_votes(
+    left: torch.Tensor, right: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, eps_d: float, eps_theta: float
+) -> torch.Tensor:
+    """``(K,)`` inlier pairs of each plane, :func:`inlier_table` summed over pairs: the
+    chord-normal angle test first (one matrix product per chunk of planes), the side and
+    ratio tests only where it passes."""
+    left, right, normals, offsets = _centred(left, right, normals, offsets)
+    u = F.normalize(right - left, dim=1)
     cos_min = math.cos(math.radians(eps_theta))
-    out = torch.empty(normals.shape[0], left.shape[0], dtype=torch.bool)
+    votes = torch.zeros(normals.shape[0], dtype=torch.int64)
     for start in range(0, normals.shape[0], CHUNK):
-        n, b = normals[start : start + CHUNK], offsets[start : start + CHUNK]  # (c, 3), (c,)
-        rl = left @ n.T + b  # (S, c)
-        rr = right @ n.T + b
-        opposite = rl * rr < 0
-        ratio = rl.abs() / rr.abs().clamp_min(torch.finfo(rr.dtype).tiny)
-        equal = (ratio > 1 - eps_d) & (ratio < 1 + eps_d)
-        along = (u_unit @ n.T).abs() > cos_min
-        out[start : start + CHUNK] = (opposite & equal & along).T
-    return out
+        k, i = torch.nonzero((normals[start : start + CHUNK] @ u.T).abs() > cos_min, as_tuple=True)
+        ok = _inlier(left[i], right[i], normals[start + k], offsets[start + k], eps_d)
+        votes[start : start + CHUNK] = torch.bincount(k[ok], minlength=min(CHUNK, normals.shape[0] - start))
+    return votes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,10 +121,9 @@ def consensus_plane(
         lam: weight of Eq. 5.4's constraint in the refit (Eq. 5.6).
     """
     normals, offsets = pair_planes(left, right)
-    table = inlier_table(left, right, normals, offsets, eps_d, eps_theta)  # (S, S)
-    votes = table.sum(1)
+    votes = plane_votes(left, right, normals, offsets, eps_d, eps_theta)  # (S,)
     winner = int(votes.argmax())
-    inliers = table[winner]
+    inliers = inlier_table(left, right, normals[winner : winner + 1], offsets[winner : winner + 1], eps_d, eps_theta)[0]
     normal, offset = plane_from_pairs(left[inliers], right[inliers], lam=lam)
     normal, offset = canonical_sign(normal, offset)
     far = (normals @ normal).abs() < math.cos(math.radians(margin_angle))

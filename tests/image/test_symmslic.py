@@ -1,0 +1,185 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
+from torchsym.image.symmslic import SymmSlic, SymmSlicSettings, mirror_pixel_pairs, symm_slic
+from torchsym.image.symmslic.settings import MirrorPairSettings
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, slic_iterations
+from torchsym.image.synthetic import mirrored_objects_image
+from torchsym.metrics.superpixels import (
+    achievable_segmentation_accuracy,
+    boundary_recall,
+    compactness,
+    explained_variation,
+    mirror_consistency,
+    segmentation_error,
+    undersegmentation_error,
+)
+
+
+def _mirrored(seed: int = 0, h: int = 160, w: int = 200, angle_deg: float = 20.0):
+    """A random smooth texture mirrored about a line through the centre at ``angle_deg``:
+    the image and its axis ``(n_x, n_y, offset)``."""
+    g = torch.Generator().manual_seed(seed)
+    base = torch.nn.functional.interpolate(torch.rand(1, 3, h // 8, w // 8, generator=g), size=(h, w), mode="bicubic")[0].clamp(0, 1)
+    t = math.radians(angle_deg)
+    n = torch.tensor([math.cos(t), math.sin(t)], dtype=torch.float64)
+    b = -float(n @ torch.tensor([w / 2, h / 2], dtype=torch.float64))
+    ys, xs = torch.meshgrid(torch.arange(h, dtype=torch.float64), torch.arange(w, dtype=torch.float64), indexing="ij")
+    d = xs * n[0] + ys * n[1] + b
+    mx, my = xs - 2 * d * n[0], ys - 2 * d * n[1]
+    grid = torch.stack([mx / (w - 1) * 2 - 1, my / (h - 1) * 2 - 1], -1)[None].float()
+    mirror = torch.nn.functional.grid_sample(base[None], grid, align_corners=True, padding_mode="border")[0]
+    img = torch.where((d > 0)[None], mirror, base)
+    return img, torch.tensor([[n[0], n[1], b]], dtype=torch.float64)
+
+
+class TestSymmSlic:
+    def test_smoke(self):
+        img, ax = _mirrored()
+        r = symm_slic(img, n_superpixels=120, axes=ax)
+        assert r.labels.shape == (160, 200) and r.labels.dtype == torch.int64
+        assert r.n_superpixels == int(r.labels.max()) + 1 == len(torch.unique(r.labels))
+        assert len(r.pairs) > 10 and 0.0 < r.score <= 1.0
+
+    def test_count_near_k(self):
+        img, ax = _mirrored()
+        for k in (60, 200):
+            r = symm_slic(img, n_superpixels=k, axes=ax)
+            assert 0.6 * k <= r.n_superpixels <= 1.3 * k
+
+    def test_claim_421_pairs_stay_mirror_images(self):
+        """After every iteration, each pair's right superpixel is the left one's reflection
+        (up to pixel rounding) and the centres are mirror images (Claim 4.2.1)."""
+        img, ax = _mirrored(1)
+        n, b = ax[0, :2], ax[0, 2]
+        import kornia
+
+        lab = kornia.color.rgb_to_lab(img[None])[0]
+        from torchsym.image.symmslic.solver import _init_centres, symmetric_region
+        from torchsym.image.symmslic.pairs import MirrorPixelPairs
+
+        none = torch.zeros(0, 2, dtype=torch.float64)
+        found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), n[None], b[None], torch.zeros(1, dtype=torch.float64))
+        region = symmetric_region(found, n[None], b[None], 160, 200)
+        grad = torch.zeros(160, 200, dtype=torch.float64)
+        c = _init_centres(lab, grad, region, n[None], b[None], 18)
+        maps = MirrorMaps.build(n[None], b[None], 160, 200)
+        for it in range(1, 5):
+            labels = slic_iterations(lab, c, maps, 18, 10.0, it)
+            for k in torch.nonzero(c.left)[:, 0][:10].tolist():
+                p = c.partner[k]
+                mirrored = c.xy[k] - 2 * (c.xy[k] @ n + b) * n
+                assert torch.allclose(mirrored, c.xy[p], atol=1e-9)
+                left_px = torch.nonzero(labels == k).double()[:, [1, 0]]
+                right_px = {tuple(v) for v in torch.nonzero(labels == p)[:, [1, 0]].tolist()}
+                refl = left_px - 2 * (left_px @ n + b)[:, None] * n
+                hits = sum(tuple(v) in right_px for v in refl.round().long().tolist())
+                assert hits >= 0.9 * len(left_px) and len(right_px) <= 1.1 * len(left_px) + 3
+
+    def test_mirror_consistency_high_and_above_slic(self):
+        cv2 = pytest.importorskip("cv2")
+        img, ax = _mirrored(2, angle_deg=-35.0)
+        r = symm_slic(img, n_superpixels=150, axes=ax)
+        ours = mirror_consistency(r.labels, ax[0, :2], float(ax[0, 2]))
+        s = cv2.ximgproc.createSuperpixelSLIC((img.permute(1, 2, 0).numpy() * 255).astype(np.uint8), region_size=15, ruler=10.0)
+        s.iterate(10)
+        theirs = mirror_consistency(s.getLabels(), ax[0, :2], float(ax[0, 2]))
+        assert ours >= 0.85 and ours > theirs + 0.3
+
+    def test_connected(self):
+        from scipy import ndimage
+
+        img, ax = _mirrored(3)
+        r = symm_slic(img, n_superpixels=100, axes=ax)
+        lbl = r.labels.numpy()
+        for k in range(r.n_superpixels):
+            _, n_parts = ndimage.label(lbl == k)
+            assert n_parts <= 2  # a reflected superpixel may split at a pixel's rounding
+
+    def test_detected_axes_on_planted_objects(self):
+        img, axes = mirrored_objects_image(1, height=240, width=320, generator=torch.Generator().manual_seed(3))
+        r = symm_slic(img, n_superpixels=200)
+        assert len(r.normals) >= 1 and len(r.pairs) > 0 and r.mask.any()
+        x1, y1, x2, y2 = axes[0].tolist()
+        d = torch.tensor([x2 - x1, y2 - y1], dtype=torch.float64)
+        true_n = torch.tensor([-d[1], d[0]]) / d.norm()
+        best = max(float((true_n @ n).abs()) for n in r.normals)
+        assert best > math.cos(math.radians(5))
+
+    def test_no_edges_plain_slic_with_note(self):
+        r = symm_slic(torch.full((3, 64, 64), 0.5), n_superpixels=16)
+        assert len(r.pairs) == 0 and "plain SLIC" in r.notes[0] and r.score == 0.0 and r.n_superpixels >= 8
+
+    def test_same_seed_same_bits(self):
+        img, _ = mirrored_objects_image(1, height=200, width=240, generator=torch.Generator().manual_seed(5))
+        a, b = SymmSlic(n_superpixels=80)(img), SymmSlic(n_superpixels=80)(img)
+        assert torch.equal(a.labels, b.labels) and torch.equal(a.pairs, b.pairs)
+
+    def test_exception(self):
+        with pytest.raises(InputShapeError, match="image"):
+            symm_slic(torch.zeros(3, 16, 16))
+        with pytest.raises(InputValueError, match="n_superpixels: expected at most"):
+            symm_slic(torch.rand(3, 40, 40), n_superpixels=1000)
+        with pytest.raises(InputShapeError, match="axes"):
+            symm_slic(torch.rand(3, 40, 40), n_superpixels=20, axes=torch.zeros(1, 3))
+        with pytest.raises(ConfigError, match=r"pairs\.eps"):
+            SymmSlicSettings.from_dict({"pairs": {"eps": 1.5}})
+
+    def test_pairs_empty_on_blank(self):
+        p = mirror_pixel_pairs(torch.zeros(3, 64, 64), MirrorPairSettings(), torch.Generator().manual_seed(0))
+        assert len(p) == 0 and p.normals.shape == (0, 2)
+
+
+class TestSuperpixelMetrics:
+    truth = np.array([[0, 0, 1, 1], [0, 0, 1, 1], [2, 2, 2, 2], [2, 2, 2, 2]])
+
+    def test_perfect(self):
+        t = self.truth
+        assert boundary_recall(t, t, tolerance=0) == 1.0
+        assert undersegmentation_error(t, t) == 0.0
+        assert achievable_segmentation_accuracy(t, t) == 1.0
+
+    def test_by_hand(self):
+        one = np.zeros((4, 4), int)  # one superpixel covering everything
+        # USE: for each of the 3 segments, min(|S&G|, |S-G|) = min(4, 12), min(4, 12), min(8, 8)
+        assert undersegmentation_error(one, self.truth) == pytest.approx((4 + 4 + 8) / 16)
+        assert achievable_segmentation_accuracy(one, self.truth) == pytest.approx(8 / 16)
+        # no superpixel boundary at all: recall 0
+        assert boundary_recall(one, self.truth, tolerance=1) == 0.0
+        cols = np.tile(np.array([0, 0, 1, 1]), (4, 1))  # split left / right
+        # truth boundary pixels: (0,1),(1,1),(1,0),(1,2),(1,3) -> right/lower differs; cols boundary at column 1
+        assert boundary_recall(cols, self.truth, tolerance=0) == pytest.approx(2 / 5)
+
+    def test_explained_variation(self):
+        img = np.array([[0.0, 0.0, 1.0, 1.0]] * 4)
+        cols = np.tile(np.array([0, 0, 1, 1]), (4, 1))
+        assert explained_variation(cols, img) == pytest.approx(1.0)
+        assert explained_variation(np.zeros((4, 4), int), img) == pytest.approx(0.0)
+
+    def test_compactness_square(self):
+        # one 4 x 4 square: area 16, perimeter 16 -> 4 pi 16 / 256 = pi / 4
+        assert compactness(np.zeros((4, 4), int)) == pytest.approx(math.pi / 4)
+
+    def test_mirror_consistency_by_hand(self):
+        lbl = np.array([[0, 1, 2, 3]] * 2)  # mirror about x = 1.5: 0 <-> 3, 1 <-> 2
+        assert mirror_consistency(lbl, [1.0, 0.0], -1.5) == 1.0
+        lbl2 = np.array([[0, 0, 1, 2]] * 2)  # 0 (4 px) reflects onto 1 (2 px) and 2 (2 px): IoU 2 / 4
+        assert mirror_consistency(lbl2, [1.0, 0.0], -1.5) == pytest.approx(0.5)
+
+    def test_segmentation_error(self):
+        truth = np.zeros((10, 10), int)
+        truth[2:6, 2:6] = 1
+        mask = truth.copy()
+        mask[2, 2] = 0
+        e = segmentation_error(mask, truth)
+        assert e["over_image"] == pytest.approx(0.01) and e["over_box"] == pytest.approx(1 / 16)
+
+    def test_exception(self):
+        with pytest.raises(InputShapeError, match="labels, truth"):
+            undersegmentation_error(np.zeros((2, 2)), np.zeros((3, 3)))

@@ -1,0 +1,219 @@
+"""SymmSLIC: superpixels that keep an image's reflection symmetry (thesis Sec. 4.2).
+
+Steps, as Algorithm 4:
+
+1. mirror pixel pairs and their axes (Sec. 4.2.1, :mod:`.pairs`);
+2. symmetric initialisation: SLIC's grid outside the symmetric region (the convex hull of
+   the pairs), mirror pairs of centres inside it;
+3. symmetric assignment and centre updates until the iterations run out (:mod:`.slic`);
+4. connectivity enforced as SLIC does, without breaking the pairs.
+
+Departure from the text: the pairs of centres sit on SLIC's grid over the left half of
+the region and its reflection (the thesis's rule for filling the region when too few
+pairs are detected), moved to the lowest gradient of the pair nearby, rather than at the
+detected edge pixels (which the thesis moves off the edges too). The grid keeps the count
+near ``k`` and the superpixels even; the thesis's count rule, ``k - s`` *pairs*, would
+give up to ``2k - s`` superpixels.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import cv2
+import kornia
+import numpy as np
+import torch
+
+from torchsym.core.checks import check_image
+from torchsym.core.random import make_generator
+from torchsym.core.registry import register_solver
+from torchsym.core.settings import Solver, resolve_settings
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.image.symmslic.pairs import MirrorPixelPairs, mirror_pixel_pairs, reflect_2d
+from torchsym.image.symmslic.result import SymmSlicResult
+from torchsym.image.symmslic.settings import SymmSlicSettings
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, mirror_labels, slic_iterations
+
+__all__ = ["SymmSlic", "symm_slic", "symmetric_region"]
+
+
+def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: torch.Tensor, h: int, w: int) -> np.ndarray:
+    """``(H, W)`` int64 axis index of the symmetric region of each axis (-1 outside): the
+    convex hull of the axis's pairs, or with no pairs (axes given by the caller) the
+    pixels whose mirror lies in the image. The first axis wins where regions overlap."""
+    region = np.full((h, w), -1, dtype=np.int64)
+    ys, xs = np.mgrid[0:h, 0:w]
+    for a in reversed(range(normals.shape[0])):
+        if len(pairs):
+            pts = torch.cat([pairs.left[pairs.axis == a], pairs.right[pairs.axis == a]]).numpy()
+            if len(pts) < 3:
+                continue
+            hull = cv2.convexHull(pts.round().astype(np.int32))
+            m = np.zeros((h, w), np.uint8)
+            cv2.fillConvexPoly(m, hull, 1)
+            region[m > 0] = a
+        else:
+            n, b = normals[a].numpy(), float(offsets[a])
+            d = xs * n[0] + ys * n[1] + b
+            mx, my = xs - 2 * d * n[0], ys - 2 * d * n[1]
+            inside = (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
+            region[inside] = a
+    return region
+
+
+def _init_centres(
+    lab: torch.Tensor, grad: torch.Tensor, region: np.ndarray, normals: torch.Tensor, offsets: torch.Tensor, step: int
+) -> Centres:
+    """SLIC's grid; grid points in an axis's region on its left side become pairs with
+    their reflections (moved within 3 x 3 to the lowest gradient of the pair)."""
+    _, h, w = lab.shape
+    ys, xs = np.meshgrid(np.arange(step / 2, h, step), np.arange(step / 2, w, step), indexing="ij")
+    g = torch.from_numpy(np.stack([xs.reshape(-1), ys.reshape(-1)], 1))  # (G, 2)
+    a = torch.from_numpy(region[g[:, 1].long().clamp(0, h - 1), g[:, 0].long().clamp(0, w - 1)])
+    side = torch.zeros(len(g), dtype=g.dtype)
+    if len(normals):
+        side = torch.where(a >= 0, (g * normals[a.clamp(min=0)]).sum(1) + offsets[a.clamp(min=0)], side)
+    plain = g[a < 0]
+    lefts, axes = g[(a >= 0) & (side <= 0)], a[(a >= 0) & (side <= 0)]
+    if len(lefts):
+        d = torch.tensor([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=g.dtype)
+        cand = lefts[:, None] + d[None]  # (L, 9, 2)
+        n, b = normals[axes][:, None], offsets[axes][:, None]
+        mir = reflect_2d(cand, n, b)
+
+        def at(p):
+            xi, yi = p[..., 0].round().long().clamp(0, w - 1), p[..., 1].round().long().clamp(0, h - 1)
+            return grad[yi, xi]
+
+        best = (at(cand) + at(mir)).argmin(1)
+        lefts = cand[torch.arange(len(lefts)), best]
+        rights = reflect_2d(lefts, normals[axes], offsets[axes])
+        inside = (rights[:, 0] >= 0) & (rights[:, 0] <= w - 1) & (rights[:, 1] >= 0) & (rights[:, 1] <= h - 1)
+        plain = torch.cat([plain, lefts[~inside]])
+        lefts, rights, axes = lefts[inside], rights[inside], axes[inside]
+    else:
+        rights = lefts
+    k0, kp = len(plain), len(lefts)
+    xy = torch.cat([plain, lefts, rights])
+    partner = torch.cat([torch.full((k0,), -1), torch.arange(k0 + kp, k0 + 2 * kp), torch.arange(k0, k0 + kp)])
+    left = torch.cat([torch.zeros(k0, dtype=torch.bool), torch.ones(kp, dtype=torch.bool), torch.zeros(kp, dtype=torch.bool)])
+    axis = torch.cat([torch.full((k0,), -1), axes, axes]).long()
+    xi, yi = xy[:, 0].round().long().clamp(0, w - 1), xy[:, 1].round().long().clamp(0, h - 1)
+    return Centres(xy, lab[:, yi, xi].T.double(), partner.long(), left, axis, normals, offsets)
+
+
+def symm_slic(
+    image: torch.Tensor,
+    settings: SymmSlicSettings | Mapping[str, Any] | None = None,
+    *,
+    axes: torch.Tensor | None = None,
+    generator: torch.Generator | None = None,
+    **overrides: Any,
+) -> SymmSlicResult:
+    """Symmetry-aware SLIC superpixels of ``image`` (thesis Sec. 4.2, Algorithm 4).
+
+    Args:
+        image: ``(C, H, W)`` or ``(1, C, H, W)`` in [0, 1] (uint8 scaled), H, W >= 32.
+        settings: :class:`SymmSlicSettings` (or a mapping); defaults: ``k = 500``,
+            compactness 10, the thesis's ``p = 64``, ``sigma = 24``, ``eps = 0.2``.
+        axes: optional ``(A, 3)`` known axes ``(n_x, n_y, offset)`` with ``n . (x, y) +
+            offset = 0``; the pair search is then skipped and each axis's region is the
+            set of pixels whose mirror lies in the image.
+        generator: the source of randomness (``torch.Generator``); None uses a fresh
+            generator seeded with 0, so the same call gives the same bits.
+        **overrides: settings by name.
+
+    Returns:
+        :class:`SymmSlicResult`; plain SLIC and a note when no axis is found.
+    """
+    t_all = time.perf_counter()
+    img = check_image(image, "image", min_size=32)
+    if img.shape[0] != 1:
+        raise InputShapeError(f"image: expected one image, (C, H, W) or (1, C, H, W), got {tuple(img.shape)}")
+    img = img[0].detach().float().cpu().clamp(0, 1)
+    settings = resolve_settings(SymmSlicSettings, settings, overrides)
+    gen = make_generator(generator)
+    _, h, w = img.shape
+    if settings.n_superpixels > h * w // 4:
+        raise InputValueError(f"n_superpixels: expected at most {h * w // 4} for a {h} x {w} image, got {settings.n_superpixels}")
+    notes: list[str] = []
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    rgb = img.expand(3, -1, -1) if img.shape[0] == 1 else img
+    if axes is not None:
+        ax = torch.as_tensor(axes, dtype=torch.float64)
+        if ax.dim() != 2 or ax.shape[1] != 3 or not bool(torch.isfinite(ax).all()) or bool((ax[:, :2].norm(dim=1) == 0).any()):
+            raise InputShapeError(f"axes: expected (A, 3) finite rows (n_x, n_y, offset) with a nonzero normal, got {tuple(ax.shape)}")
+        scale = ax[:, :2].norm(dim=1, keepdim=True)
+        normals, offsets = ax[:, :2] / scale, ax[:, 2] / scale[:, 0]
+        none = torch.zeros(0, 2, dtype=torch.float64)
+        found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), normals, offsets, torch.zeros(len(ax), dtype=torch.float64))
+    else:
+        found = mirror_pixel_pairs(rgb, settings.pairs, gen)
+        normals, offsets = found.normals, found.offsets
+        if len(normals) == 0:
+            notes.append("no symmetry axis found among the boundaries: plain SLIC superpixels")
+    timings["pairs"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lab = kornia.color.rgb_to_lab(rgb[None])[0]  # (3, H, W)
+    gy, gx = np.gradient(lab[0].numpy())
+    grad = torch.from_numpy(np.hypot(gx, gy))
+    region = symmetric_region(found, normals, offsets, h, w)
+    step = max(1, int(round(math.sqrt(h * w / settings.n_superpixels))))
+    c = _init_centres(lab, grad, region, normals, offsets, step)
+    timings["init"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    maps = MirrorMaps.build(normals, offsets, h, w)
+    labels = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters)
+    timings["slic"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    keep = ((c.partner < 0) | c.left).numpy()
+    min_size = max(1, int(settings.min_size_share * h * w / max(1, len(c.xy))))
+    lbl = enforce_connectivity(labels.numpy(), min_size, keep)
+    lbl = torch.from_numpy(lbl)
+    lbl = mirror_labels(lbl, c, maps)  # right members: their left partners' reflections
+    # pieces the reflection's rounding cut off (and pixels no window reached) join a neighbour
+    lbl = torch.from_numpy(enforce_connectivity(lbl.numpy(), 1, np.ones(len(c.xy), dtype=bool)))
+    used, compact = torch.unique(lbl, return_inverse=True)
+    timings["connectivity"] = time.perf_counter() - t0
+    remap = torch.full((len(c.xy),), -1, dtype=torch.int64)
+    remap[used] = torch.arange(len(used))
+    left_ids = torch.nonzero(c.left)[:, 0]
+    pl, pr = remap[left_ids], remap[c.partner[left_ids]]
+    ok = (pl >= 0) & (pr >= 0)
+    pair_tab = torch.stack([pl[ok], pr[ok]], 1)
+    pair_axis = c.axis[left_ids][ok]
+    in_pair = torch.zeros(len(used), dtype=torch.bool)
+    in_pair[pair_tab.reshape(-1)] = True
+    mask = in_pair[compact]
+    timings["total"] = time.perf_counter() - t_all
+    return SymmSlicResult(
+        labels=compact,
+        n_superpixels=len(used),
+        pairs=pair_tab,
+        pair_axis=pair_axis,
+        normals=normals,
+        offsets=offsets,
+        mirror_left=found.left,
+        mirror_right=found.right,
+        mask=mask,
+        score=float(mask.double().mean()),
+        notes=notes,
+        timings=timings,
+    )
+
+
+@register_solver("symmslic", kind="image")
+class SymmSlic(Solver):
+    """SymmSLIC superpixels and the symmetric object's mask (thesis Sec. 4.2-4.3); see
+    :func:`symm_slic`."""
+
+    settings_class = SymmSlicSettings
+
+    def forward(self, image: torch.Tensor, generator: torch.Generator | None = None) -> SymmSlicResult:
+        gen = generator if generator is not None else make_generator(self.settings.seed)
+        return symm_slic(image, self.settings, generator=gen)
