@@ -33,7 +33,9 @@ class SymmSlicSettings(Settings):
     """Symmetry-aware SLIC superpixels (thesis Sec. 4.2, Algorithm 4)."""
 
     n_superpixels: int = setting(500, "superpixels asked for (k)", low=1)
-    compactness: float = setting(10.0, "SLIC's compactness m (the thesis's lambda, 1 to 40)", low=0.0, low_open=True)
+    compactness: float = setting(
+        10.0, "SLIC's compactness m, as OpenCV's ruler (colour in OpenCV's 8-bit Lab); the thesis's lambda, 1 to 40", low=0.0, low_open=True
+    )
     max_iters: int = setting(10, "k-means iterations", low=1)
     pairs: MirrorPairSettings = group(MirrorPairSettings)
     min_size_share: float = setting(0.25, "fragments smaller than this share of the mean superpixel are merged", low=0.0, high=1.0)

@@ -24,7 +24,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["Centres", "MirrorMaps", "enforce_connectivity", "mirror_labels", "slic_iterations"]
+__all__ = ["Centres", "MirrorMaps", "absorb_slivers", "enforce_connectivity", "mirror_labels", "slic_iterations"]
 
 
 @dataclasses.dataclass
@@ -170,37 +170,69 @@ def slic_iterations(lab: torch.Tensor, c: Centres, maps: MirrorMaps, step: int, 
     return labels
 
 
-def enforce_connectivity(labels: np.ndarray, min_size: int, keep: np.ndarray) -> np.ndarray:
-    """SLIC's last step: each label keeps its largest 4-connected piece; smaller pieces,
-    pieces under ``min_size`` pixels and unlabelled pixels (-1) take the label of the
-    nearest kept pixel. Labels where ``keep`` (``(K,)`` bool) is False are left alone
-    (the right members of pairs, derived from their mirrors afterwards)."""
+def _components(labels: np.ndarray) -> np.ndarray:
+    """4-connected components of equal labels: ``(H, W)`` component ids (-1 stays -1)."""
     h, w = labels.shape
     n = h * w
     flat = labels.reshape(-1)
     idx = np.arange(n).reshape(h, w)
-    edges = []
+    rows, cols = [], []
     for a, b in ((idx[:, :-1], idx[:, 1:]), (idx[:-1, :], idx[1:, :])):
         a, b = a.reshape(-1), b.reshape(-1)
         m = (flat[a] == flat[b]) & (flat[a] >= 0)
-        edges.append((a[m], b[m]))
-    rows = np.concatenate([e[0] for e in edges])
-    cols = np.concatenate([e[1] for e in edges])
-    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n))
+        rows.append(a[m])
+        cols.append(b[m])
+    graph = coo_matrix((np.ones(sum(len(r) for r in rows), dtype=np.int8), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
     _, comp = connected_components(graph, directed=False)
-    sizes = np.bincount(comp)
-    valid = flat >= 0
-    # the largest component of each label
-    order = np.lexsort((-sizes[comp[valid]], flat[valid]))
-    lab_v, comp_v = flat[valid][order], comp[valid][order]
-    first = np.ones(len(lab_v), dtype=bool)
-    first[1:] = lab_v[1:] != lab_v[:-1]
-    largest = np.zeros(sizes.shape[0], dtype=bool)
-    largest[comp_v[first]] = True
-    kept = valid & largest[comp] & (sizes[comp] >= min_size)
-    kept |= valid & ~keep[np.clip(flat, 0, None)]
+    return np.where(flat >= 0, comp, -1).reshape(h, w)
+
+
+def enforce_connectivity(labels: np.ndarray, min_size: int, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """SLIC's last step (Achanta et al.'s ``EnforceLabelConnectivity``): every 4-connected
+    piece of at least ``min_size`` pixels of an *active* label (``active``: ``(K,)`` bool)
+    becomes a superpixel of its own; smaller pieces and unlabelled pixels (-1) take the
+    label of the nearest such piece. Pixels of inactive labels are left out (set to -1):
+    the right members of pairs, derived afterwards from their partners.
+
+    Returns:
+        ``(labels (H, W), origin (K',))``: new labels ``0 .. K'-1`` and the old label
+        each came from.
+    """
+    h, w = labels.shape
+    lbl = np.where((labels >= 0) & active[np.clip(labels, 0, None)], labels, -1)
+    comp = _components(lbl)
+    valid = comp >= 0
+    sizes = np.bincount(comp[valid], minlength=1)
+    big = np.zeros(sizes.shape[0], dtype=bool)
+    big[: len(sizes)] = sizes >= min_size
+    kept = valid & big[np.clip(comp, 0, None)]
+    if not kept.any():
+        return np.zeros((h, w), dtype=np.int64), np.zeros(1, dtype=np.int64) + max(int(labels.max()), 0)
+    ids, new = np.unique(comp[kept], return_inverse=True)
+    out = np.full((h, w), -1, dtype=np.int64)
+    out[kept] = new
+    origin = np.zeros(len(ids), dtype=np.int64)
+    origin[new] = lbl[kept]
+    if not kept.all():
+        _, (iy, ix) = ndimage.distance_transform_edt(~kept, return_indices=True)
+        out = out[iy, ix]
+    return out, origin
+
+
+def absorb_slivers(labels: np.ndarray) -> np.ndarray:
+    """Labels where every label keeps only its largest 4-connected piece; the other
+    pieces (slivers cut off by the rounding of reflected pixels) take the label of the
+    nearest kept pixel."""
+    comp = _components(labels)
+    sizes = np.bincount(comp.reshape(-1))
+    flat_l, flat_c = labels.reshape(-1), comp.reshape(-1)
+    order = np.lexsort((-sizes[flat_c], flat_l))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = flat_l[order][1:] != flat_l[order][:-1]
+    largest = np.zeros(len(sizes), dtype=bool)
+    largest[flat_c[order][first]] = True
+    kept = largest[comp]
     if kept.all():
         return labels
-    _, (iy, ix) = ndimage.distance_transform_edt(~kept.reshape(h, w), return_indices=True)
-    out = labels[iy, ix]
-    return out
+    _, (iy, ix) = ndimage.distance_transform_edt(~kept, return_indices=True)
+    return labels[iy, ix]

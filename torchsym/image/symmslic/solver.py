@@ -6,7 +6,8 @@ Steps, as Algorithm 4:
 2. symmetric initialisation: SLIC's grid outside the symmetric region (the convex hull of
    the pairs), mirror pairs of centres inside it;
 3. symmetric assignment and centre updates until the iterations run out (:mod:`.slic`);
-4. connectivity enforced as SLIC does, without breaking the pairs.
+4. connectivity enforced as SLIC does (each large enough piece its own superpixel, the
+   rest merged), on the left members, whose pieces then get their mirror partners.
 
 Departure from the text: the pairs of centres sit on SLIC's grid over the left half of
 the region and its reflection (the thesis's rule for filling the region when too few
@@ -36,9 +37,13 @@ from torchsym.errors import InputShapeError, InputValueError
 from torchsym.image.symmslic.pairs import MirrorPixelPairs, mirror_pixel_pairs, reflect_2d
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.image.symmslic.settings import SymmSlicSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, mirror_labels, slic_iterations
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, absorb_slivers, enforce_connectivity, mirror_labels, slic_iterations
 
-__all__ = ["SymmSlic", "symm_slic", "symmetric_region"]
+__all__ = ["LAB_SCALE", "SymmSlic", "symm_slic", "symmetric_region"]
+
+#: CIELAB (L in [0, 100]) to OpenCV's 8-bit Lab scale (L in [0, 255]; a, b unchanged), so
+#: that ``compactness`` means what OpenCV's ``ruler`` does
+LAB_SCALE = torch.tensor([255.0 / 100.0, 1.0, 1.0])
 
 
 def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: torch.Tensor, h: int, w: int) -> np.ndarray:
@@ -106,6 +111,26 @@ def _init_centres(
     return Centres(xy, lab[:, yi, xi].T.double(), partner.long(), left, axis, normals, offsets)
 
 
+def _pair_pieces(pieces: torch.Tensor, origin: torch.Tensor, c: Centres, maps: MirrorMaps) -> tuple[torch.Tensor, Centres]:
+    """Superpixels after connectivity: each piece of a left member gets a right partner
+    (a new label) whose pixels are the piece's mirror pixels."""
+    n = int(pieces.max()) + 1
+    is_left = c.left[origin]
+    right_ids = torch.full((n,), -1, dtype=torch.int64)
+    right_ids[is_left] = n + torch.arange(int(is_left.sum()))
+    k = n + int(is_left.sum())
+    partner = torch.full((k,), -1, dtype=torch.int64)
+    partner[:n] = right_ids
+    partner[right_ids[is_left]] = torch.nonzero(is_left)[:, 0]
+    left = torch.zeros(k, dtype=torch.bool)
+    left[:n] = is_left
+    axis = torch.full((k,), -1, dtype=torch.int64)
+    axis[:n] = c.axis[origin]
+    axis[right_ids[is_left]] = c.axis[origin][is_left]
+    pieces_c = Centres(torch.zeros(k, 2, dtype=c.xy.dtype), torch.zeros(k, 3, dtype=c.lab.dtype), partner, left, axis, c.normals, c.offsets)
+    return mirror_labels(pieces, pieces_c, maps), pieces_c
+
+
 def symm_slic(
     image: torch.Tensor,
     settings: SymmSlicSettings | Mapping[str, Any] | None = None,
@@ -159,7 +184,7 @@ def symm_slic(
             notes.append("no symmetry axis found among the boundaries: plain SLIC superpixels")
     timings["pairs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lab = kornia.color.rgb_to_lab(rgb[None])[0]  # (3, H, W)
+    lab = kornia.color.rgb_to_lab(rgb[None])[0] * LAB_SCALE[:, None, None]  # (3, H, W), OpenCV's 8-bit Lab scale
     gy, gx = np.gradient(lab[0].numpy())
     grad = torch.from_numpy(np.hypot(gx, gy))
     region = symmetric_region(found, normals, offsets, h, w)
@@ -171,16 +196,14 @@ def symm_slic(
     labels = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters)
     timings["slic"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    keep = ((c.partner < 0) | c.left).numpy()
+    active = ((c.partner < 0) | c.left).numpy()
     min_size = max(1, int(settings.min_size_share * h * w / max(1, len(c.xy))))
-    lbl = enforce_connectivity(labels.numpy(), min_size, keep)
-    lbl = torch.from_numpy(lbl)
-    lbl = mirror_labels(lbl, c, maps)  # right members: their left partners' reflections
-    # pieces the reflection's rounding cut off (and pixels no window reached) join a neighbour
-    lbl = torch.from_numpy(enforce_connectivity(lbl.numpy(), 1, np.ones(len(c.xy), dtype=bool)))
+    pieces, origin = enforce_connectivity(labels.numpy(), min_size, active)
+    lbl, c = _pair_pieces(torch.from_numpy(pieces), torch.from_numpy(origin), c, maps)
+    lbl = torch.from_numpy(absorb_slivers(lbl.numpy()))
     used, compact = torch.unique(lbl, return_inverse=True)
     timings["connectivity"] = time.perf_counter() - t0
-    remap = torch.full((len(c.xy),), -1, dtype=torch.int64)
+    remap = torch.full((len(c.partner),), -1, dtype=torch.int64)
     remap[used] = torch.arange(len(used))
     left_ids = torch.nonzero(c.left)[:, 0]
     pl, pr = remap[left_ids], remap[c.partner[left_ids]]
