@@ -1,6 +1,6 @@
 """torchsym.viz.pointcloud: the pictures of a reflection plane."""
 
-import torchsym
+import torchsym.viz
 from torchsym.pointcloud import detect_reflection_plane, planted_symmetric_cloud
 
 

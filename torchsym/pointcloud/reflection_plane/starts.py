@@ -179,7 +179,8 @@ def _fallback(search: StartSearch, ctx: RefineContext, settings: ReflectionPlane
         if (frac, -med) > (search.best[2], -search.best[3]):
             search.best = (nk, bk, frac, med)
             search.iterations = it_k + it_a
-        if frac >= settings.starts.accept * ctx.reference or since >= settings.refine.fallback_patience or is_dominant(refined, settings.starts):
+        accepted = frac >= settings.starts.accept * ctx.reference
+        if accepted or since >= settings.refine.fallback_patience or is_dominant(refined, settings.starts):
             break
 
 
