@@ -28,11 +28,11 @@ Methods, side by side in one run:
 * ``thesis``: the same detector configured as the thesis's Algorithms 5 and 6 unchanged
   (``configs/pointcloud_plane_thesis.yaml``);
 * two ablations of the defaults, each undoing one improvement the issue names:
-  ``procrustes S`` (``update="procrustes"``: the SVD step over every orthogonal S with
+  ``procrustes S`` (``alternation.update="procrustes"``: the SVD step over every orthogonal S with
   determinant -1, which admits rotoreflections, instead of the symmetric S = I - 2 n n^T)
-  and ``one start`` (``n_starts=1, pca_starts=False``: only the best-scored initial
+  and ``one start`` (``n_starts=1, starts.pca=False``: only the best-scored initial
   normal is refined, as the thesis refines its best grid cell);
-* ``no kernel stage``: the defaults with ``kernel_stage=False`` (on perturbed clouds the
+* ``no kernel stage``: the defaults with ``kernel.enabled=False`` (on perturbed clouds the
   defaults refine the plane by kernel correlation; see
   :func:`torchsym.pointcloud.detect_reflection_plane`);
 * ``pca+icp``: the baseline users pick today (Cicconet et al.): reflect the cloud about
@@ -188,9 +188,9 @@ def main(argv=None) -> int:
     methods = {
         "torchsym": run_torchsym(build_pipeline(ROOT / "configs" / "pointcloud_plane.yaml").steps[0]),
         "thesis": run_torchsym(build_pipeline(ROOT / "configs" / "pointcloud_plane_thesis.yaml").steps[0]),
-        "procrustes S": run_torchsym(torchsym.ReflectionPlaneDetector(update="procrustes")),
-        "one start": run_torchsym(torchsym.ReflectionPlaneDetector(n_starts=1, pca_starts=False)),
-        "no kernel stage": run_torchsym(torchsym.ReflectionPlaneDetector(kernel_stage=False)),
+        "procrustes S": run_torchsym(torchsym.ReflectionPlaneDetector(alternation={"update": "procrustes"})),
+        "one start": run_torchsym(torchsym.ReflectionPlaneDetector(n_starts=1, starts={"pca": False})),
+        "no kernel stage": run_torchsym(torchsym.ReflectionPlaneDetector(kernel={"enabled": False})),
     }
     try:
         import open3d  # noqa: F401

@@ -53,7 +53,7 @@ class TestLoadConfig:
             load_config({"input": "image", "steps": ["reflection_plane"]})
 
     def test_bad_value_reported(self):
-        with pytest.raises(ConfigError, match="n_starts: expected an integer >= 1, got 0"):
+        with pytest.raises(ConfigError, match="n_starts: expected an int >= 1, got 0"):
             build_pipeline({"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_starts": 0}}]})
 
     def test_missing_file(self, tmp_path):

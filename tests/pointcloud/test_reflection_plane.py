@@ -4,11 +4,12 @@ import pytest
 import torch
 
 import torchsym
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.geometry import plane_angle, point_plane_distance
 from torchsym.pointcloud import (
     ReflectionPlaneDetector,
     ReflectionPlaneResult,
+    ReflectionPlaneSettings,
     add_outliers,
     detect_reflection_plane,
     mirror_complete,
@@ -85,7 +86,7 @@ class TestDetectReflectionPlane:
         det = ReflectionPlaneDetector(seed=3)
         a, b = det(cloud.points), det(cloud.points)
         assert torch.equal(a.normal, b.normal)
-        assert "n_starts=40" in repr(det)
+        assert repr(det) == "ReflectionPlaneDetector(seed=3)"
 
     def test_float64_kept(self, cloud):
         res = detect_reflection_plane(cloud.points.double())
@@ -131,7 +132,12 @@ class TestDetectReflectionPlane:
 
     def test_thesis_variant_runs(self, cloud):
         res = detect_reflection_plane(
-            cloud.points, init="grid", n_starts=1, pca_starts=False, coarse=False, accelerate=False, update="procrustes"
+            cloud.points,
+            n_starts=1,
+            init={"directions": "grid"},
+            starts={"pca": False},
+            prealign={"enabled": False},
+            alternation={"accelerate": False, "update": "procrustes"},
         )
         assert res.n_starts == 1 and res.iterations >= 1
 
@@ -170,10 +176,51 @@ class TestDetectReflectionPlane:
             detect_reflection_plane(bad)
 
     def test_exception_settings(self):
-        with pytest.raises(InputValueError, match="init: expected 'sphere' or 'grid', got 'random'"):
-            ReflectionPlaneDetector(init="random")
-        with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1, got 0"):
+        with pytest.raises(ConfigError, match="init.directions: expected one of 'sphere', 'grid', got 'random'"):
+            ReflectionPlaneDetector(init={"directions": "random"})
+        with pytest.raises(ConfigError, match="n_starts: expected an int >= 1, got 0"):
             detect_reflection_plane(torch.rand(10, 3, generator=_gen()), n_starts=0)
+        with pytest.raises(ConfigError, match=r"polish.max_iter: unknown setting of PolishSettings"):
+            detect_reflection_plane(torch.rand(10, 3, generator=_gen()), polish={"max_iter": 3})
+        with pytest.raises(ConfigError, match="settings: expected ReflectionPlaneSettings"):
+            detect_reflection_plane(torch.rand(10, 3, generator=_gen()), settings=3)
+
+    @pytest.mark.parametrize("factor", [1e200, 1e-200, 1e150])
+    def test_extreme_scale(self, cloud, factor):
+        """Coordinates of any finite magnitude: the same plane, scaled (eigh overflowed at 1e200)."""
+        pts = cloud.points.double()
+        ref = detect_reflection_plane(pts)
+        res = detect_reflection_plane(pts * factor)
+        assert _deg(res.normal, ref.normal) < 1e-6 and res.score == ref.score
+        assert float(res.offset) / factor == pytest.approx(float(ref.offset), rel=1e-6, abs=1e-9)
+        assert res.residual / factor == pytest.approx(ref.residual, rel=1e-6, abs=1e-12)
+        assert torch.isfinite(res.center).all() and torch.isfinite(res.transform).all()
+
+    def test_extreme_scale_too_wide(self):
+        pts = (torch.rand(50, 3, generator=_gen(), dtype=torch.float64) * 2 - 1) * 1.7e308
+        with pytest.raises(InputValueError, match="points: expected a bounding box whose diagonal is finite"):
+            detect_reflection_plane(pts)
+
+    def test_settings_object_mapping_and_overrides_agree(self, cloud):
+        pts = cloud.points[:1000]
+        a = detect_reflection_plane(pts, ReflectionPlaneSettings(n_starts=3).replace({"polish.enabled": False}))
+        b = detect_reflection_plane(pts, {"n_starts": 3, "polish": {"enabled": False}})
+        c = detect_reflection_plane(pts, n_starts=3, polish={"enabled": False})
+        d = ReflectionPlaneDetector(n_starts=3, polish={"enabled": False})(pts)
+        for r in (b, c, d):
+            assert torch.equal(a.normal, r.normal) and torch.equal(a.pairs, r.pairs) and a.iterations == r.iterations
+
+    def test_seed_setting(self, cloud):
+        pts = cloud.points[:1000]
+        a = detect_reflection_plane(pts, seed=4)
+        b = detect_reflection_plane(pts, generator=4)
+        assert torch.equal(a.normal, b.normal) and torch.equal(a.inliers, b.inliers)
+
+    def test_to_dict_json(self, cloud):
+        import json
+
+        d = detect_reflection_plane(cloud.points[:500]).to_dict()
+        assert d["type"] == "ReflectionPlaneResult" and len(json.loads(json.dumps(d))["normal"]) == 3
 
     def test_numpy_input(self, cloud):
         res = torchsym.detect(cloud.points.numpy())

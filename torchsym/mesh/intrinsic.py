@@ -850,7 +850,7 @@ def _extrinsic_candidate(
     pts = torch.from_numpy(v)
     if v.shape[0] > n_samples:
         pts = pts[random_subset(v.shape[0], n_samples, gen)]
-    plane = detect_reflection_plane(pts, kernel_stage=False, generator=gen)
+    plane = detect_reflection_plane(pts, kernel={"enabled": False}, generator=gen)
     nrm, off = plane.normal.numpy(), float(plane.offset)
     mirrored = v - 2.0 * (v @ nrm + off)[:, None] * nrm  # (V, 3)
     vmap = _kdtree(v).query(mirrored, k=1, workers=-1)[1].astype(np.int64)

@@ -3,8 +3,8 @@
 from torchsym.pointcloud.reflection_plane import (
     ReflectionPlaneDetector,
     ReflectionPlaneResult,
+    ReflectionPlaneSettings,
     detect_reflection_plane,
-    sphere_normals,
 )
 from torchsym.pointcloud.synthetic import (
     SymmetricCloud,
@@ -20,6 +20,7 @@ from torchsym.pointcloud.synthetic import (
 __all__ = [
     "ReflectionPlaneDetector",
     "ReflectionPlaneResult",
+    "ReflectionPlaneSettings",
     "SymmetricCloud",
     "add_outliers",
     "detect_reflection_plane",
@@ -29,5 +30,4 @@ __all__ = [
     "random_rigid_motion",
     "remove_part",
     "sample_surface",
-    "sphere_normals",
 ]

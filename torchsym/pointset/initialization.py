@@ -42,7 +42,7 @@ import torch
 from scipy.spatial import cKDTree
 
 from torchsym.geometry.reflection import plane_from_pairs, spread_normals
-from torchsym.pointcloud.candidates import sphere_normals
+from torchsym.pointcloud.reflection_plane.candidates import sphere_normals
 
 __all__ = ["normal_scan", "pair_search", "scan_normals", "thesis_pair_search"]
 
@@ -319,7 +319,7 @@ def scan_normals(d: int, count: int, rng: np.random.Generator) -> np.ndarray:
     """``(count, d)`` unit normals spread over the directions of hyperplanes in ``R^d``.
 
     ``d = 2``: ``count`` angles evenly in ``[0, pi)``; ``d = 3``: the Fibonacci lattice on
-    the half sphere (:func:`torchsym.pointcloud.candidates.sphere_normals`); ``d >= 4``:
+    the half sphere (:func:`torchsym.pointcloud.reflection_plane.candidates.sphere_normals`); ``d >= 4``:
     Gaussian directions drawn from ``rng`` (no lattice covers high-dimensional spheres
     evenly at this count).
     """

@@ -9,8 +9,10 @@ import numpy as np
 import torch
 
 from torchsym.io.write import write_ply
+from torchsym.pointcloud.reflection_plane import ReflectionPlaneResult
+from torchsym.viz import artifact_writer
 
-__all__ = ["plane_quad", "plot_reflection_plane", "reflection_plane_ply"]
+__all__ = ["plane_quad", "plot_reflection_plane", "reflection_plane_ply", "write_reflection_plane"]
 
 
 def plane_quad(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor) -> np.ndarray:
@@ -105,3 +107,14 @@ def plot_reflection_plane(points: torch.Tensor, result: Any, path: str | Path, *
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
+
+
+@artifact_writer(ReflectionPlaneResult)
+def write_reflection_plane(result: ReflectionPlaneResult, data: torch.Tensor, out_dir: Path, stem: str) -> list[Path]:
+    """``<stem>_plane.ply`` (see :func:`reflection_plane_ply`) and ``<stem>_plane.png``
+    (see :func:`plot_reflection_plane`) of ``result`` on the cloud ``data (N, 3)``."""
+    out_dir = Path(out_dir)
+    return [
+        reflection_plane_ply(data, result, out_dir / f"{stem}_plane.ply"),
+        plot_reflection_plane(data, result, out_dir / f"{stem}_plane.png"),
+    ]

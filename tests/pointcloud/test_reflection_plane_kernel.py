@@ -1,4 +1,4 @@
-"""The kernel-correlation stage of the reflection plane detector, for perturbed clouds."""
+"""torchsym.pointcloud.reflection_plane.kernel: the kernel-correlation stage, for perturbed clouds."""
 
 import itertools
 import math
@@ -6,7 +6,7 @@ import math
 import pytest
 import torch
 
-from torchsym.errors import InputValueError
+from torchsym.errors import ConfigError
 from torchsym.geometry import plane_angle, reflect_points
 from torchsym.matching import KNNIndex
 from torchsym.pointcloud import (
@@ -15,8 +15,8 @@ from torchsym.pointcloud import (
     perturb,
     planted_symmetric_cloud,
 )
-from torchsym.pointcloud.alignment import kernel_refine, kernel_score, surface_variation
-from torchsym.pointcloud.reflection_plane import _dense_part
+from torchsym.pointcloud.reflection_plane.kernel import kernel_refine, kernel_score, surface_variation
+from torchsym.pointcloud.reflection_plane.prepare import dense_part
 
 
 def _turned(normal: torch.Tensor, degrees: float) -> torch.Tensor:
@@ -59,9 +59,9 @@ class TestKernelRefine:
         start = _turned(cloud.normal, 8.0)
         d, _ = index.query(reflect_points(noisy, cloud.normal, cloud.offset))
         width = 2.0 * float(d.median())
-        n, _, steps = kernel_refine(noisy, index, start, -(start @ centre), width, max_iter=100)
+        n, _, steps = kernel_refine(noisy, index, start, -(start @ centre), width, max_iters=100)
         assert math.degrees(float(plane_angle(n, cloud.normal))) < 1.0 and 1 < steps < 100
-        short = kernel_refine(noisy, index, start, -(start @ centre), width, max_iter=3)  # slow from afar
+        short = kernel_refine(noisy, index, start, -(start @ centre), width, max_iters=3)  # slow from afar
         assert short[2] == 3 and math.degrees(float(plane_angle(short[0], cloud.normal))) > 2.0
         assert abs(float(n.norm()) - 1.0) < 1e-9
 
@@ -70,7 +70,7 @@ class TestKernelStage:
     def test_clean_cloud_skips_it(self):
         """Exact mirror pairs: the stage does not run, and the result equals the one without it."""
         cloud = planted_symmetric_cloud(1000, generator=0)
-        on, off = detect_reflection_plane(cloud.points), detect_reflection_plane(cloud.points, kernel_stage=False)
+        on, off = detect_reflection_plane(cloud.points), detect_reflection_plane(cloud.points, kernel={"enabled": False})
         assert torch.equal(on.normal, off.normal) and torch.equal(on.offset, off.offset)
         assert on.timings["kernel"] < 0.01
 
@@ -81,7 +81,7 @@ class TestKernelStage:
             cloud = planted_symmetric_cloud(1000, generator=seed)
             noisy = perturb(cloud, 50, generator=100 + seed).points
             for stage in (True, False):
-                res = detect_reflection_plane(noisy, kernel_stage=stage)
+                res = detect_reflection_plane(noisy, kernel={"enabled": stage})
                 right[stage] += float(plane_angle(res.normal, cloud.normal)) < 0.2  # radians, about 11 deg
         assert right[True] >= 5 and right[False] <= right[True] - 2
 
@@ -90,7 +90,7 @@ class TestKernelStage:
         g = torch.Generator().manual_seed(4)
         u = torch.randn(3000, 3, generator=g, dtype=torch.float64)
         pts = u / u.norm(dim=1, keepdim=True) * torch.tensor([3.0, 2.0, 1.0], dtype=torch.float64)
-        res = detect_reflection_plane(pts, kernel_stage=True)
+        res = detect_reflection_plane(pts, kernel={"enabled": True})
         assert res.timings["kernel"] == 0.0
         assert surface_variation(pts, KNNIndex(pts)) < 0.1
         noisy = pts + 0.3 * torch.randn(3000, 3, generator=g, dtype=torch.float64)
@@ -101,7 +101,7 @@ class TestKernelStage:
         """Fewer points than the kernel's 8 neighbours: no crash."""
         for seed in (6017, 7002, 7009):
             pts = torch.randn(n, 3, generator=torch.Generator().manual_seed(seed), dtype=torch.float64)
-            res = detect_reflection_plane(pts, kernel_stage=True)
+            res = detect_reflection_plane(pts, kernel={"enabled": True})
             assert torch.isfinite(res.normal).all()
 
     def test_result_describes_the_returned_plane(self):
@@ -109,7 +109,7 @@ class TestKernelStage:
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = perturb(cloud, 50, generator=100).points
         res = detect_reflection_plane(noisy)  # on by default
-        assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy, kernel_stage=False).timings["kernel"] == 0.0
+        assert res.timings["kernel"] > 0 and detect_reflection_plane(noisy, kernel={"enabled": False}).timings["kernel"] == 0.0
         d, _ = KNNIndex(noisy).query(reflect_points(noisy, res.normal, res.offset))
         assert res.residual == pytest.approx(float(d.median()), rel=1e-6)
         assert torch.equal(res.inliers, d <= res.tolerance)
@@ -120,7 +120,7 @@ class TestKernelStage:
         width = 2.0 * float(d.median())
         scores = [kernel_score(noisy, index, n, b, width)]
         for _ in range(5):
-            n, b, steps = kernel_refine(noisy, index, n, b, width, max_iter=1)
+            n, b, steps = kernel_refine(noisy, index, n, b, width, max_iters=1)
             assert steps == 1
             scores.append(kernel_score(noisy, index, n, b, width))
         assert all(later >= earlier - 1e-9 for earlier, later in itertools.pairwise(scores)) and scores[-1] > scores[0]
@@ -129,11 +129,11 @@ class TestKernelStage:
         """A perturbed cloud with 200 % uniform outliers: its points stay, most outliers go."""
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = add_outliers(perturb(cloud, 20, generator=100), 200, generator=200).points
-        kept, index = _dense_part(noisy, KNNIndex(noisy))
+        kept, index = dense_part(noisy, KNNIndex(noisy))
         from_cloud = torch.cdist(kept, noisy).argmin(1) < 1000  # the first 1,000 are the cloud's
         assert int(from_cloud.sum()) >= 990 and int((~from_cloud).sum()) <= 400
         assert index.points.shape == kept.shape
-        clean, _ = _dense_part(cloud.points, KNNIndex(cloud.points))
+        clean, _ = dense_part(cloud.points, KNNIndex(cloud.points))
         assert clean.shape[0] >= 950  # a sampled surface is (nearly) all dense
 
     def test_dense_part_with_duplicate_stacks(self):
@@ -141,8 +141,8 @@ class TestKernelStage:
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
         noisy = perturb(cloud, 50, generator=100).points
         stacked = torch.cat([noisy, noisy[:10].repeat(30, 1)])  # 10 points, 31 copies each
-        kept, _ = _dense_part(stacked, KNNIndex(stacked))
-        plain, _ = _dense_part(noisy, KNNIndex(noisy))  # 863 of the 1,000 without the stacks
+        kept, _ = dense_part(stacked, KNNIndex(stacked))
+        plain, _ = dense_part(noisy, KNNIndex(noisy))  # 863 of the 1,000 without the stacks
         assert torch.unique(kept, dim=0).shape[0] >= 0.95 * plain.shape[0] > 800
 
     def test_mirror_pairs_among_outliers_skip_it(self):
@@ -164,10 +164,10 @@ class TestKernelStage:
             cloud = planted_symmetric_cloud(1000, generator=seed)
             noisy = add_outliers(perturb(cloud, 20, generator=100 + seed), 200, generator=200 + seed).points
             for stage in (True, False):
-                res = detect_reflection_plane(noisy, kernel_stage=stage)
+                res = detect_reflection_plane(noisy, kernel={"enabled": stage})
                 right[stage] += math.degrees(float(plane_angle(res.normal, cloud.normal))) < 3.0
         assert right[True] == 4 and right[False] <= 2
 
     def test_setting_is_checked(self):
-        with pytest.raises(InputValueError, match="kernel_stage"):
-            detect_reflection_plane(torch.rand(50, 3), kernel_stage="yes")
+        with pytest.raises(ConfigError, match="kernel.enabled: expected true or false, got 'yes'"):
+            detect_reflection_plane(torch.rand(50, 3), kernel={"enabled": "yes"})

@@ -1,9 +1,8 @@
-"""Candidate reflection planes of a point cloud: the initialisation of thesis Sec. 5.2.3.
+"""Candidate normals: thesis Algorithm 5 (Sec. 5.2.3), and a sphere of normals with a beam search.
 
-Algorithm 5 scores a 10 x 10 grid of (theta_x, theta_y) rotation angles on a 500-point
-sample by the Frobenius residual of nearest mirror images. ``init="grid"`` keeps that;
-``init="sphere"`` scores a near-uniform set of normals with robust kernels and narrows
-the best with a beam search (see :func:`initial_normals`).
+``directions="grid"`` scores the thesis's 10 x 10 grid of ``(theta_x, theta_y)`` by the
+Frobenius residual; ``directions="sphere"`` scores near-uniform normals with Welsch kernels
+and narrows the best by a beam search (see ``docs/design/reflection_plane.md``).
 """
 
 from __future__ import annotations
@@ -14,6 +13,7 @@ import torch
 
 from torchsym.geometry.reflection import angles_to_normal, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
+from torchsym.pointcloud.reflection_plane.settings import InitSettings
 
 __all__ = ["grid_normals", "initial_normals", "score_normals", "sphere_normals"]
 
@@ -21,11 +21,8 @@ __all__ = ["grid_normals", "initial_normals", "score_normals", "sphere_normals"]
 def sphere_normals(count: int, *, dtype: torch.dtype = torch.float64) -> torch.Tensor:
     """``(count, 3)`` near-uniform unit normals on the upper half sphere (Fibonacci lattice).
 
-    Every plane through the origin has exactly one normal with ``z >= 0``, so the half
-    sphere covers all planes. ``count = 100`` (as many as the thesis's 10 x 10 grid, but
-    evenly spread: the grid crowds its normals near the poles) leaves no plane much more
-    than 10 degrees from a sample, the basin of thesis Sec. 5.2.3; the beam search of
-    :func:`initial_normals` narrows from there.
+    The half sphere holds one normal of every plane through the origin; ``count = 100``
+    leaves no plane much more than 10 degrees (the basin of thesis Sec. 5.2.3) from one.
     """
     i = torch.arange(count, dtype=dtype) + 0.5
     z = 1.0 - i / count  # uniform in (0, 1]
@@ -48,21 +45,13 @@ def score_normals(
     sigmas: tuple[float, ...] | None,
     coarse_index: KNNIndex | None = None,
 ):
-    """Offsets and costs of planes with the given normals through the sample's middle.
+    """Offsets and costs of planes with ``normals (K, 3)`` through the middle of ``sample (n2, 3)``.
 
-    Each plane passes through the median of the sample's projections on its normal: the
-    centre of a symmetric 1-D distribution, robust to outliers and, unlike Algorithm 5's
-    coordinate-wise median, unchanged by rotating the cloud. Mirror images of the sample
-    are matched in the denser refinement subsample (against the sample itself, sampling
-    gaps hide the difference between good and bad planes). The cost is the thesis's
-    Frobenius norm (``sigmas=None``), or for each ``sigma`` minus the mean Welsch kernel
-    ``exp(-d^2 / 2 sigma^2)`` of the residuals ``d``: bounded, so outliers cannot dominate
-    it, and smooth, so a plane a few degrees off still scores (the median residual, tried
-    first, ranked the true basin badly on shapes with strong partial symmetries).
-
-    Searches stop at 4 sigma, where the kernel is below 1e-3. Kernels wider than the
-    first are evaluated against ``coarse_index`` when given (a sparser set: the wide
-    kernel does not need the density, and far searches in a small tree are cheap).
+    Each plane passes through the median of the sample's projections on its normal. The
+    sample's mirror images are matched in ``index``. The cost is the thesis's Frobenius
+    residual (``sigmas=None``), or for each ``sigma`` minus the mean Welsch kernel
+    ``exp(-d^2 / 2 sigma^2)`` of the residuals, searched to 4 sigma; kernels after the
+    first are evaluated against ``coarse_index`` when given.
 
     Returns ``offsets (K,)`` and a list of ``(K,)`` costs, one per sigma.
     """
@@ -79,31 +68,21 @@ def score_normals(
     return offsets, costs
 
 
-def initial_normals(
-    sample: torch.Tensor,
-    index: KNNIndex,
-    *,
-    init: str,
-    n_directions: int,
-    grid_step: float,
-    beam: int,
-    spacing: float,
-    dtype: torch.dtype,
-):
+def initial_normals(sample: torch.Tensor, index: KNNIndex, settings: InitSettings, spacing: float):
     """Candidate normals with offsets, ranked (Algorithm 5, refined by a beam search).
 
-    ``init="grid"`` scores the thesis's (theta_x, theta_y) grid by the Frobenius residual
-    and stops there. ``init="sphere"`` scores ``n_directions`` near-uniform normals with
-    two Welsch kernels: a narrow one (2 point spacings), which outliers cannot fool, and a
-    wide one (8 spacings), which still rewards a plane a few degrees off on clean thin
-    shapes. Around the ``beam`` best by the narrow kernel, two rounds score six normals
-    at half the previous radius each. The result interleaves the two rankings.
+    ``directions="grid"``: the thesis's grid, ranked by the Frobenius residual.
+    ``directions="sphere"``: ``n_directions`` near-uniform normals scored by a narrow
+    (2 spacings) and a wide (8 spacings) Welsch kernel; around the ``n_beam`` best by the
+    narrow one, two rounds score six normals at half the previous radius each. The order
+    interleaves the two rankings.
 
-    Returns ``(normals (K, 3), offsets (K,), order)`` with ``order`` the candidates' indices,
-    best first.
+    Returns ``(normals (K, 3), offsets (K,), order (K',))``, ``order`` best first.
     """
-    if init == "grid":
-        normals = grid_normals(grid_step, torch.float64).to(device=sample.device, dtype=dtype)
+    dtype = sample.dtype
+    n_directions, beam = settings.n_directions, settings.n_beam
+    if settings.directions == "grid":
+        normals = grid_normals(settings.grid_step, torch.float64).to(device=sample.device, dtype=dtype)
         offsets, (cost,) = score_normals(sample, index, normals, None)
         return normals, offsets, cost.argsort()
     normals = sphere_normals(n_directions).to(device=sample.device, dtype=dtype)

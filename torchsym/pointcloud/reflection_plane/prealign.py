@@ -1,0 +1,83 @@
+"""Robust point-to-plane pre-alignment of a start, and the support that ranks starts.
+
+An extension of thesis Sec. 5.2.3 (see ``docs/design/reflection_plane.md``). Points are
+normalised to a unit bounding-box diagonal; planes are ``(normal (3,), offset ())``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_basis
+from torchsym.matching.knn import KNNIndex
+
+__all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
+
+
+def local_pca(points: torch.Tensor, index: KNNIndex, k: int = 10) -> tuple[torch.Tensor, torch.Tensor]:
+    """Eigenvalues ``(N, 3)`` (ascending) and eigenvectors ``(N, 3, 3)`` (columns) of the
+    scatter matrix of each point's ``k`` nearest neighbours."""
+    _, j = index.query(points, k=min(k, points.shape[0]))
+    nb = points[j]  # (N, k, 3)
+    nb = nb - nb.mean(1, keepdim=True)
+    return torch.linalg.eigh(nb.transpose(1, 2) @ nb)
+
+
+def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
+    """``(N, 3)`` unit surface normals by PCA of each point's ``k`` nearest neighbours."""
+    return local_pca(points, index, k)[1][:, :, 0]
+
+
+def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
+    """One Gauss-Newton step for the plane minimising ``sum w_i (nu_i . (reflect(x_i) - q_i))^2``.
+
+    ``x, q, nu (N, 3)``: points, their matches and the matches' normals. The normal moves
+    in its tangent plane, the offset freely; Cauchy weights with scale 2.5 x the median
+    absolute residual (``robust=False``: all 1). Returns ``(normal (3,), offset ())``.
+    """
+    dtype = x.dtype
+    basis = tangent_basis(normal)  # (3, 2)
+    signed = x @ normal + offset  # (N,)
+    r = ((x - 2.0 * signed[:, None] * normal - q) * nu).sum(1)  # (N,)
+    nun = nu @ normal
+    jac = -2.0 * torch.cat([nun[:, None] * (x @ basis) + signed[:, None] * (nu @ basis), nun[:, None]], 1)  # (N, 3)
+    if robust:
+        s = 2.5 * r.abs().median().clamp_min(torch.finfo(dtype).eps)
+        w = 1.0 / (1.0 + (r / s) ** 2)
+    else:
+        w = torch.ones_like(r)
+    a = (jac * w[:, None]).T @ jac
+    g = (jac * w[:, None]).T @ r
+    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype, device=x.device), g[:, None]).solution[:, 0]
+    m = normal + basis @ step[:2]
+    norm = m.norm()
+    return m / norm, (offset + step[2]) / norm
+
+
+def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, tol_angle: float):
+    """Point-to-plane Gauss-Newton from one start: mirror images of ``queries (Q, 3)``
+    matched in ``targets (M, 3)`` (normals ``nu (M, 3)``, ``index`` over ``targets``),
+    until the normal moves less than ``tol_angle`` degrees or after ``max_iters`` steps.
+
+    Returns ``(normal, offset, steps)``.
+    """
+    it = 0
+    for it in range(1, max_iters + 1):
+        _, j = index.query(reflect_points(queries, normal, offset))
+        n_new, b_new = point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
+        if float((n_new * normal).sum()) < 0:
+            n_new, b_new = -n_new, -b_new
+        moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
+        normal, offset = n_new, b_new
+        if moved < tol_angle:
+            break
+    return normal, offset, it
+
+
+def support(points, index, normal, offset, sigma: float) -> tuple[float, float]:
+    """Soft share of ``points (N, 3)`` whose mirror image lands near the set (mean of
+    ``exp(-d^2 / 2 sigma^2)`` over residuals ``d``), and the median residual."""
+    d, _ = index.query(reflect_points(points, normal, offset))
+    return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())
