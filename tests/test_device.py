@@ -211,8 +211,8 @@ class TestPointSet:
                 float(torch.rand(1, generator=g)) * 0.7 + 0.3
             )
         img = torch.maximum(img, img.flip(-1))
-        cpu = torchsym.pointsymm_image(img, generator=gen(1))
-        gpu = torchsym.pointsymm_image(img.to(CUDA), generator=gen(1))
+        cpu = torchsym.point_symm_image(img, generator=gen(1))
+        gpu = torchsym.point_symm_image(img.to(CUDA), generator=gen(1))
         assert tensors_on(gpu, CUDA.type) == []
         assert deg(gpu.normal, cpu.normal) < 0.5
 

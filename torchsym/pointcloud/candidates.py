@@ -13,25 +13,10 @@ import math
 import torch
 
 from torchsym.geometry.reflection import angles_to_normal, reflect_points, tangent_basis
+from torchsym.geometry.sampling import sphere_normals
 from torchsym.matching.knn import KNNIndex
 
 __all__ = ["grid_normals", "initial_normals", "score_normals", "sphere_normals"]
-
-
-def sphere_normals(count: int, *, dtype: torch.dtype = torch.float64) -> torch.Tensor:
-    """``(count, 3)`` near-uniform unit normals on the upper half sphere (Fibonacci lattice).
-
-    Every plane through the origin has exactly one normal with ``z >= 0``, so the half
-    sphere covers all planes. ``count = 100`` (as many as the thesis's 10 x 10 grid, but
-    evenly spread: the grid crowds its normals near the poles) leaves no plane much more
-    than 10 degrees from a sample, the basin of thesis Sec. 5.2.3; the beam search of
-    :func:`initial_normals` narrows from there.
-    """
-    i = torch.arange(count, dtype=dtype) + 0.5
-    z = 1.0 - i / count  # uniform in (0, 1]
-    r = torch.sqrt((1.0 - z * z).clamp_min(0))
-    phi = i * math.pi * (3.0 - math.sqrt(5.0))
-    return torch.stack([r * torch.cos(phi), r * torch.sin(phi), z], dim=1)
 
 
 def grid_normals(step_deg: float, dtype: torch.dtype) -> torch.Tensor:
