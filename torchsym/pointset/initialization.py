@@ -327,20 +327,13 @@ def normal_scan(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Starting planes from a scan of hyperplanes through the centroid (an extension of Sec. 7.2.4).
 
-    The candidates are the principal axes of ``x`` (the normal of a mirror-symmetric set
-    is an eigenvector of its covariance, since the reflection commutes with it) and
-    ``n_normals`` directions of :func:`scan_normals`, all through the centroid, which lies
-    on the plane of a symmetric set. Each is scored on ``n_sample`` points by the mean
-    squared distance from a reflected point to its nearest input point, over the
-    ``keep_fraction`` share of smallest distances (the cardinality limit of Sec. 7.4.4; the
-    planes still pass through the centroid, which lies on the plane only for a complete
-    set, so with missing parts the alternation has to move them), and the ``n_keep``
-    best, at least ``min_separation`` degrees apart, are returned. A plane whose
-    reflection sends most sampled points nearest to themselves is left out: it is the
-    trivial mirror of a set that is flat (or thinner than its point spacing) across it,
-    which every set has when it lies in a hyperplane. Unlike the pair search this needs
-    no pair of points to pass a test, so it does not break down when the noise is
-    comparable to the point spacing.
+    The candidates are the principal axes of ``x`` (the normal of a mirror-symmetric set is
+    an eigenvector of its covariance) and ``n_normals`` directions of :func:`scan_normals`.
+    Each is scored on ``n_sample`` points by the mean squared distance from a reflected
+    point to its nearest input point over the ``keep_fraction`` share of smallest distances;
+    planes that send most sampled points nearest to themselves (the trivial mirror of a set
+    flat across them) are left out. The ``n_keep`` best, at least ``min_separation`` degrees
+    apart, are returned.
 
     Args:
         x: ``(N, D)`` points.
