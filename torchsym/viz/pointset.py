@@ -169,7 +169,7 @@ def plot_image_axis(image: Any, result: ImageAxisResult, path: str | Path, *, ma
     for a, b in _pairs(np.where(inl, perm, -1), max_pairs):
         ax.plot(corners[[a, b], 0], corners[[a, b], 1], color="#00e5ff", lw=1.2, alpha=0.9)
     if (~inl).any():
-        ax.scatter(corners[~inl, 0], corners[~inl, 1], s=26, marker="x", c="#ff3030", linewidths=1.3, label="corner, no mirror")
+        ax.scatter(corners[~inl, 0], corners[~inl, 1], s=18, marker="x", c="#ff3030", linewidths=1.1, alpha=0.75, label="corner, no mirror")
     if inl.any():
         ax.scatter(corners[inl, 0], corners[inl, 1], s=30, c="#00e5ff", edgecolors="black", linewidths=0.6, label="corner with a mirror")
     seg = result.segment.detach().cpu().double().numpy()
