@@ -191,7 +191,7 @@ class TestPointCloud:
 
 
 class TestPointSet:
-    def test_pointsymm_on_device(self):
+    def test_point_symm_on_device(self):
         s = torchsym.make_symmetric_pointset(200, 3, 1e-4, generator=gen(0))
         cpu = torchsym.point_symm(s.points, generator=gen(1))
         gpu = torchsym.point_symm(s.points.to(CUDA), generator=gen(1))

@@ -26,3 +26,5 @@ class TestHarrisCorners:
     def test_exception(self):
         with pytest.raises(InputShapeError, match=r"image: expected a single image \(B = 1\)"):
             harris_corners(torch.zeros(2, 1, 10, 10))
+        with pytest.raises(InputShapeError, match="image: expected height and width >= 4"):
+            harris_corners(torch.rand(3, 3))  # kornia's padding error, untyped, before the check

@@ -28,9 +28,9 @@ def harris_corners(image: Any, n_corners: int = 200, harris_k: float = 0.04, nms
         nms_size: odd window size of the non-maximum suppression, in pixels.
 
     Raises:
-        InputShapeError: not a single image, or a side under 3 pixels.
+        InputShapeError: not a single image, or a side under 4 pixels.
     """
-    img = check_image(image, "image", min_size=3)
+    img = check_image(image, "image", min_size=4)  # kornia pads the 7 x 7 window by 3
     if img.shape[0] != 1:
         raise InputShapeError(f"image: expected a single image (B = 1), got {tuple(img.shape)}")
     gray = img.mean(1, keepdim=True)  # (1, 1, H, W)
