@@ -107,9 +107,9 @@ def _inliers(corners: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: flo
     return dist < threshold, idx
 
 
-def _ransac(corners_t: torch.Tensor, tree: cKDTree, settings: PointSymmImageSettings, g: torch.Generator):
-    """The axis ``(inliers (K,), normal (2,), offset)`` of most inliers over the RANSAC samples."""
-    corners = corners_t.double().numpy()
+def _ransac(corners: np.ndarray, tree: cKDTree, settings: PointSymmImageSettings, g: torch.Generator):
+    """The axis ``(inliers (K,), normal (2,), offset)`` with most inliers over the RANSAC samples
+    of the corners ``(K, 2)``."""
     k = corners.shape[0]
     ransac = settings.ransac
     m = max(4, round(ransac.sample_fraction * k))
@@ -118,7 +118,7 @@ def _ransac(corners_t: torch.Tensor, tree: cKDTree, settings: PointSymmImageSett
     best = None
     for _ in range(ransac.n_iters):
         subset = random_subset(k, m, generator=g)
-        res = point_symm(corners_t.double()[subset], sample_settings, generator=g)
+        res = point_symm(torch.from_numpy(corners)[subset], sample_settings, generator=g)
         nrm, off = res.normal.numpy(), float(res.offset)
         inl, _ = _inliers(corners, tree, nrm, off, ransac.inlier_threshold)
         if best is None or inl.sum() > best[0].sum():
@@ -126,12 +126,12 @@ def _ransac(corners_t: torch.Tensor, tree: cKDTree, settings: PointSymmImageSett
     return best
 
 
-def _refit(corners_t: torch.Tensor, tree: cKDTree, best, threshold: float, g: torch.Generator):
+def _refit(corners: np.ndarray, tree: cKDTree, best, threshold: float, g: torch.Generator):
     """The best axis refitted on its inliers when that keeps at least as many."""
     inl, nrm, off = best
     if inl.sum() >= 2:
-        refit = point_symm(corners_t.double()[torch.from_numpy(inl)], scan={"enabled": False}, generator=g)
-        r_inl, _ = _inliers(corners_t.double().numpy(), tree, refit.normal.numpy(), float(refit.offset), threshold)
+        refit = point_symm(torch.from_numpy(corners)[torch.from_numpy(inl)], scan={"enabled": False}, generator=g)
+        r_inl, _ = _inliers(corners, tree, refit.normal.numpy(), float(refit.offset), threshold)
         if r_inl.sum() >= inl.sum():
             nrm, off = refit.normal.numpy(), float(refit.offset)
     return nrm, off
@@ -171,15 +171,16 @@ def point_symm_image(
     """
     img = check_image(image, "image", min_size=MIN_SIDE)
     settings = resolve_settings(PointSymmImageSettings, settings, overrides)
-    corners_t = harris_corners(img, settings.harris.max_corners, settings.harris.k).cpu()  # (K, 2) on the image's device
+    corners_t = harris_corners(img, settings.harris.max_corners, settings.harris.k).cpu()  # step 1: (K, 2), Harris on the image's device
     k = corners_t.shape[0]
     if k < 4:
         raise InputValueError(f"image: expected at least 4 Harris corners, found {k}")
     g = make_generator(generator)
-    tree = cKDTree(corners_t.double().numpy())
-    best = _ransac(corners_t, tree, settings, g)
-    nrm, off = _refit(corners_t, tree, best, settings.ransac.inlier_threshold, g)
-    inl, idx = _inliers(corners_t.double().numpy(), tree, nrm, off, settings.ransac.inlier_threshold)
+    corners = corners_t.double().numpy()  # (K, 2)
+    tree = cKDTree(corners)
+    best = _ransac(corners, tree, settings, g)  # step 2
+    nrm, off = _refit(corners, tree, best, settings.ransac.inlier_threshold, g)  # step 3
+    inl, idx = _inliers(corners, tree, nrm, off, settings.ransac.inlier_threshold)
     perm = np.where(inl, idx, -1)
     h, w = img.shape[-2:]
     dtype = img.dtype
