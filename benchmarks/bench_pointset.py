@@ -17,8 +17,8 @@ of variance ``sigma^2``):
    generator's exact model with the correspondences summed out by MCMC
    (:func:`posterior_mean_plane`, told sigma^2, started at the truth): how close to the
    oracle any estimator that does not know the correspondences can come;
-3. the thesis's pair search (``init="thesis"``, Sec. 7.2.4 word for word) against ours, both
-   without the scan of extra starting planes (``n_scan=0``); the oracle rows of 2. give the
+3. the thesis's pair search (``init.method="thesis"``, Sec. 7.2.4 word for word) against ours, both
+   without the scan of extra starting planes (``scan.enabled=False``); the oracle rows of 2. give the
    scan's effect at each noise level;
 4. run time of the whole algorithm for ``n`` = 500 (thesis: 38.4 s in MATLAB), 2,000 and
    10,000 points in 3-D;
@@ -235,7 +235,7 @@ def init_comparison(dims, sigmas, n_sets, n=300):
             for k in range(n_sets):
                 s = planted(n, d, s2, seed=900 + k)
                 for init in errs:
-                    r = point_symm(s.points, init=init, n_scan=0)  # the pair searches alone
+                    r = point_symm(s.points, init={"method": init}, scan={"enabled": False})  # the pair searches alone
                     errs[init].append(float(normal_angle_error(r.normal, s.normal)))
             rows.append({
                 "d": d, "sigma2": s2, "sets": n_sets,
@@ -259,7 +259,7 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3, kde=False, bayes=False):
     for k in range(n_sets):
         s = planted(n, d, sigma2, seed=500 + k)
         r = point_symm(s.points)
-        no_scan.append(float(normal_angle_error(point_symm(s.points, n_scan=0).normal, s.normal)))
+        no_scan.append(float(normal_angle_error(point_symm(s.points, scan={"enabled": False}).normal, s.normal)))
         t = point_symm(s.points, initial=(s.normal, s.offset))
         if kde:
             nrm_ml = kde_ml_plane(s.points.double().numpy(), s.normal.double().numpy(), float(s.offset), sigma2)
@@ -499,7 +499,7 @@ def to_markdown(res) -> str:
         ),
         "",
         (
-            "Every noise level of the target, same protocol (15 sets each; \"no scan\": `n_scan=0`, the pair search's "
+            "Every noise level of the target, same protocol (15 sets each; \"no scan\": `scan.enabled=False`, the pair search's "
             "starts alone, as before the scan of planes through the centroid and the principal axes was added):"
         ),
         "",

@@ -191,7 +191,7 @@ class TestPointCloud:
 
 
 class TestPointSet:
-    def test_pointsymm_on_device(self):
+    def test_point_symm_on_device(self):
         s = torchsym.make_symmetric_pointset(200, 3, 1e-4, generator=gen(0))
         cpu = torchsym.point_symm(s.points, generator=gen(1))
         gpu = torchsym.point_symm(s.points.to(CUDA), generator=gen(1))
@@ -211,8 +211,8 @@ class TestPointSet:
                 float(torch.rand(1, generator=g)) * 0.7 + 0.3
             )
         img = torch.maximum(img, img.flip(-1))
-        cpu = torchsym.pointsymm_image(img, generator=gen(1))
-        gpu = torchsym.pointsymm_image(img.to(CUDA), generator=gen(1))
+        cpu = torchsym.point_symm_image(img, generator=gen(1))
+        gpu = torchsym.point_symm_image(img.to(CUDA), generator=gen(1))
         assert tensors_on(gpu, CUDA.type) == []
         assert deg(gpu.normal, cpu.normal) < 0.5
 

@@ -50,7 +50,7 @@ class TestOnInputDevice:
         assert solve(x=torch.ones(2, device="meta")).normal.device.type == "meta"  # by keyword
 
     @pytest.mark.parametrize(
-        "fn", ["ksymmetry_axes", "boundary_clique_axes", "pointsymm_image", "intrinsic_symmetry"]
+        "fn", ["ksymmetry_axes", "boundary_clique_axes", "point_symm_image", "intrinsic_symmetry"]
     )
     def test_solvers_return_on_the_input_device(self, fn):
         import inspect

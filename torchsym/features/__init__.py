@@ -1,5 +1,6 @@
-"""Local features shared by several solvers: SIFT, mirrored SIFT, mirror pairs (thesis Sec. 2.2.1)."""
+"""Local features shared by several solvers: SIFT, mirrored SIFT, mirror pairs (thesis Sec. 2.2.1), Harris corners."""
 
+from torchsym.features.harris import harris_corners
 from torchsym.features.mirror_pairs import (
     choose_k1,
     elbow_index,
@@ -18,6 +19,7 @@ __all__ = [
     "choose_k1",
     "detect_sift",
     "elbow_index",
+    "harris_corners",
     "mirror_descriptors",
     "mirror_distance_matrix",
     "mirror_permutation",

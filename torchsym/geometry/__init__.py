@@ -16,6 +16,7 @@ from torchsym.geometry.reflection import (
     spread_normals,
     tangent_basis,
 )
+from torchsym.geometry.sampling import sphere_normals
 
 __all__ = [
     "angles_to_normal",
@@ -30,6 +31,7 @@ __all__ = [
     "reflection_matrix",
     "reflection_matrix_from_angles",
     "reflection_transform",
+    "sphere_normals",
     "spread_normals",
     "tangent_basis",
 ]

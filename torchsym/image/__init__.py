@@ -4,6 +4,7 @@ from torchsym.image.axes import ReflectionAxesBatch, ReflectionAxesResult
 from torchsym.image.boundary_cliques import BoundaryCliqueDetector, boundary_clique_axes
 from torchsym.image.ksymmetry import KSymmetryDetector, ksymmetry_axes
 from torchsym.image.symmslic import SymmSlic, SymmSlicResult, symm_slic
+from torchsym.image.pointsymm_axis import ImageAxisResult, PointSymmImage, PointSymmImageSettings, point_symm_image
 
 __all__: list[str] = [
     "BoundaryCliqueDetector",
@@ -15,4 +16,8 @@ __all__: list[str] = [
     "boundary_clique_axes",
     "ksymmetry_axes",
     "symm_slic",
+    "ImageAxisResult",
+    "PointSymmImage",
+    "PointSymmImageSettings",
+    "point_symm_image",
 ]

@@ -1,23 +1,11 @@
 """The correspondence step of PointSymm: the mirror of every point (thesis Sec. 7.2.3).
 
-For a fixed reflection the best correspondences ``P`` solve a linear assignment problem
-(Claim 7.2.4): row ``i`` is the reflected point ``x_i'``, column ``j`` the input point ``x_j``,
-and the cost of ``P_ij = 1`` is ``|x_i' - x_j|^2``. The thesis relaxes the integer program to
-an LP solved by Karmarkar's algorithm (``O(n^3.5)``) and rounds it; we solve the assignment
-problem exactly instead, which is both optimal and faster:
-
-- ``exact``: the Jonker-Volgenant algorithm of :func:`scipy.optimize.linear_sum_assignment`
-  on the dense ``N x N`` cost matrix (``O(N^3)`` worst case, far less on near-permutation
-  costs). The cardinality limit ``e^T P e <= 2k`` of Sec. 7.4.4 (at most ``m = 2k`` matched
-  points, for missing parts) is exact too: ``N - m`` zero-cost "unmatched" columns are added,
-  so the solver keeps the ``m`` matches whose total cost is least.
-- ``sparse``: each reflected point may only match one of its ``n_neighbors`` nearest input
-  points (found with :class:`scipy.spatial.cKDTree`), plus a private "unmatched" option that
-  costs more than any real edge; solved by
-  :func:`scipy.sparse.csgraph.min_weight_full_bipartite_matching` (LAPJVsp). This is the
-  exact optimum whenever every point's true mirror is among its reflection's nearest
-  neighbours, i.e. once the reflection is roughly right; the cardinality limit is then
-  applied by keeping the ``m`` cheapest matches.
+For a fixed reflection the best correspondences solve a linear assignment problem (Claim
+7.2.4) with cost ``|x_i' - x_j|^2``, solved exactly rather than by the thesis's relaxed LP:
+``exact``, Jonker-Volgenant on the dense ``N x N`` cost (the cardinality limit of Sec. 7.4.4
+exact too), or ``sparse``, a matching on each reflected point's ``n_neighbors`` nearest input
+points plus a private "unmatched" option (LAPJVsp; exact once the reflection is roughly
+right, the cardinality limit then approximate). See ``docs/design/pointsymm.md``.
 """
 
 from __future__ import annotations

@@ -1,50 +1,30 @@
-"""Randomised search for mirror pairs that starts PointSymm (thesis Sec. 7.2.4).
+"""Starting planes of PointSymm: the randomised pair search (thesis Sec. 7.2.4) and a scan.
 
-Pick two points ``x_p, x_q`` at random. Every other point ``x_i`` proposes the plane ``pi_pi``
-that bisects ``(x_p, x_i)``; the pair ``(x_q, x_j)`` confirms it when its own bisecting plane
-``pi_qj`` has nearly the same normal, ``acos(|n_pi . n_qj|) <= eps_theta``, and ``x_q``, ``x_j``
-are nearly equally far from ``pi_pi``, ``min(d_q, d_j) / max(d_q, d_j) >= 1 - eps_d``. Both
-tests together say that ``x_j`` lies close to the reflection of ``x_q`` through ``pi_pi``, so
-instead of drawing the ``x_j`` one by one in random order (the thesis's sampling without
-replacement), we look up the few points nearest to that reflection in a k-d tree and test
-only those; the tests are the thesis's.
-
-What the thesis leaves open, and what we add so that the search survives mild noise:
-
-- which confirmed ``(i, j)`` a run keeps. Each candidate plane (the bisector of both pairs)
-  is verified on a fixed random subset of the points by the robust symmetry error
-  ``mean min(r^2, h^2)`` (``r`` the distance from a reflected point to the nearest input point,
-  ``h`` the median nearest-neighbour distance). The best-verified candidates are polished by
-  a few trimmed ICP steps on that subset (:func:`_polish`) and verified again.
-- noise. When it is comparable to the chord lengths times ``eps_theta``, no true pair passes
-  the tests, so every ``(i, j)`` is a candidate; a pair that passed is kept unless another
-  candidate verifies more than twice as well.
-
-:func:`thesis_pair_search` is the search exactly as Sec. 7.2.4 states it, for comparison
-(``point_symm(..., init="thesis")``).
-
-Each run gives one polished plane; the robust median of the ``n_runs`` planes (and of their
-points) starts the alternation. On the synthetic sets of Sec. 7.4.2 (``n = 300``, 3-D) this
-start is good enough up to noise of standard deviation about 0.03 (``sigma^2 = 1e-3``); at
-``sigma^2 >= 3e-3`` single pairs no longer define usable planes and the start is usually
-wrong. :func:`normal_scan` (an extension) gives starts that need no pair: planes through the
-centroid, scored by how close the reflected set lands to the set; :func:`point_symm
-<torchsym.pointset.point_symm>` adds them when the pair search's plane leaves most points
-without an exact mirror (see ``benchmarks/results/pointset.md``).
+:func:`pair_search` tests the thesis's two conditions (angle ``acos(|n_pi . n_qj|) <=
+eps_theta``, distance ratio ``>= 1 - eps_d``) on the k-d tree neighbours of the reflected
+``x_q`` rather than on random draws, verifies each candidate plane on a random subset by the
+robust error ``mean min(r^2, h^2)``, polishes the best by trimmed ICP steps and returns the
+robust median of the runs' planes. :func:`thesis_pair_search` is Sec. 7.2.4 word for word.
+:func:`normal_scan` (an extension) scores planes through the centroid and needs no pair.
+:func:`choose_starts` and :func:`initial_plane` turn these (or a caller's plane) into starts
+of the alternation. Design notes: ``docs/design/pointsymm.md``.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.core.checks import check_points
+from torchsym.errors import InputValueError
 from torchsym.geometry.reflection import plane_from_pairs, spread_normals
-from torchsym.pointcloud.reflection_plane.candidates import sphere_normals
+from torchsym.geometry.sampling import sphere_normals
 
-__all__ = ["normal_scan", "pair_search", "scan_normals", "thesis_pair_search"]
+__all__ = ["choose_starts", "initial_plane", "normal_scan", "pair_search", "scan_normals", "thesis_pair_search"]
 
 
 def _bisector(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -161,7 +141,7 @@ def pair_search(
     rng: np.random.Generator,
     *,
     n_runs: int = 10,
-    eps_theta: float = math.radians(2.0),
+    eps_theta: float = 2.0,
     eps_d: float = 0.05,
     n_look: int = 3,
     n_verify: int = 64,
@@ -176,7 +156,7 @@ def pair_search(
         x: ``(N, D)`` points.
         rng: NumPy generator that draws ``x_p, x_q``.
         n_runs: runs (each finds two candidate mirror pairs and gives one plane).
-        eps_theta: angle tolerance in radians.
+        eps_theta: angle tolerance in degrees.
         eps_d: relative distance tolerance.
         n_look: points near each reflected ``x_q`` that are tested.
         n_verify: size of the random subset that verifies and polishes candidate planes.
@@ -194,6 +174,7 @@ def pair_search(
         subset; and ``found``, the number of runs in which some pair passed the thesis's two
         tests.
     """
+    eps_theta = math.radians(eps_theta)
     n = x.shape[0]
     tree = cKDTree(x) if tree is None else tree
     nn_dist, _ = tree.query(x, k=min(2, n))
@@ -244,7 +225,7 @@ def thesis_pair_search(
     rng: np.random.Generator,
     *,
     n_runs: int = 10,
-    eps_theta: float = math.radians(2.0),
+    eps_theta: float = 2.0,
     eps_d: float = 0.05,
     chunk: int = 64,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
@@ -268,6 +249,7 @@ def thesis_pair_search(
         ``(K, D)`` (``K = 2 x`` the runs that found a pair), and the number of such runs.
         When no run finds a pair, the bisectors of the runs' ``(x_p, x_q)`` are used.
     """
+    eps_theta = math.radians(eps_theta)
     n = x.shape[0]
     normals: list[np.ndarray] = []
     mids: list[np.ndarray] = []
@@ -319,7 +301,7 @@ def scan_normals(d: int, count: int, rng: np.random.Generator) -> np.ndarray:
     """``(count, d)`` unit normals spread over the directions of hyperplanes in ``R^d``.
 
     ``d = 2``: ``count`` angles evenly in ``[0, pi)``; ``d = 3``: the Fibonacci lattice on
-    the half sphere (:func:`torchsym.pointcloud.reflection_plane.candidates.sphere_normals`); ``d >= 4``:
+    the half sphere (:func:`torchsym.geometry.sphere_normals`); ``d >= 4``:
     Gaussian directions drawn from ``rng`` (no lattice covers high-dimensional spheres
     evenly at this count).
     """
@@ -345,20 +327,13 @@ def normal_scan(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Starting planes from a scan of hyperplanes through the centroid (an extension of Sec. 7.2.4).
 
-    The candidates are the principal axes of ``x`` (the normal of a mirror-symmetric set
-    is an eigenvector of its covariance, since the reflection commutes with it) and
-    ``n_normals`` directions of :func:`scan_normals`, all through the centroid, which lies
-    on the plane of a symmetric set. Each is scored on ``n_sample`` points by the mean
-    squared distance from a reflected point to its nearest input point, over the
-    ``keep_fraction`` share of smallest distances (the cardinality limit of Sec. 7.4.4; the
-    planes still pass through the centroid, which lies on the plane only for a complete
-    set, so with missing parts the alternation has to move them), and the ``n_keep``
-    best, at least ``min_separation`` degrees apart, are returned. A plane whose
-    reflection sends most sampled points nearest to themselves is left out: it is the
-    trivial mirror of a set that is flat (or thinner than its point spacing) across it,
-    which every set has when it lies in a hyperplane. Unlike the pair search this needs
-    no pair of points to pass a test, so it does not break down when the noise is
-    comparable to the point spacing.
+    The candidates are the principal axes of ``x`` (the normal of a mirror-symmetric set is
+    an eigenvector of its covariance) and ``n_normals`` directions of :func:`scan_normals`.
+    Each is scored on ``n_sample`` points by the mean squared distance from a reflected
+    point to its nearest input point over the ``keep_fraction`` share of smallest distances;
+    planes that send most sampled points nearest to themselves (the trivial mirror of a set
+    flat across them) are left out. The ``n_keep`` best, at least ``min_separation`` degrees
+    apart, are returned.
 
     Args:
         x: ``(N, D)`` points.
@@ -390,3 +365,40 @@ def normal_scan(
     order = order[np.isfinite(cost[order])]
     chosen = spread_normals(torch.from_numpy(normals), torch.from_numpy(order), n_keep, min_separation)
     return [(normals[k], centre.copy()) for k in chosen]
+
+
+def choose_starts(
+    normal0: np.ndarray, point0: np.ndarray, normals: np.ndarray, points: np.ndarray, errors: np.ndarray, n_starts: int
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The median plane, then the runs' planes by increasing error, skipping near-duplicates
+    (within 5 degrees and 0.05 in offset); at most ``n_starts`` ``(normal (D,), point (D,))``."""
+    chosen = [(normal0, point0)]
+    for k in np.argsort(errors, kind="stable"):
+        if len(chosen) >= n_starts:
+            break
+        nk, pk = normals[k], points[k]
+        if all(abs(float(nk @ nc)) < math.cos(math.radians(5.0)) or abs(float(nk @ (pk - pc))) > 0.05 for nc, pc in chosen):
+            chosen.append((nk, pk))
+    return chosen
+
+
+def initial_plane(initial: Any, mu: np.ndarray, radius: float, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """A caller's ``(normal (D,), offset ())`` as a unit normal and a point on the plane in the
+    coordinates ``(x - mu) / radius``.
+
+    Raises:
+        InputShapeError, InputValueError: ``initial`` is not a finite plane of ``R^d``.
+    """
+    if not isinstance(initial, (tuple, list)) or len(initial) != 2:
+        raise InputValueError(f"initial: expected a (normal, offset) pair, got {type(initial).__name__}")
+    normal = check_points(torch.as_tensor(initial[0]).reshape(1, -1), "initial[0]", dim=d, min_points=1)
+    normal = normal.detach().to("cpu", torch.float64).numpy()[0]
+    offset = torch.as_tensor(initial[1], dtype=torch.float64)
+    if offset.numel() != 1 or not bool(torch.isfinite(offset).all()):
+        raise InputValueError(f"initial[1]: expected a finite scalar offset, got shape {tuple(offset.shape)}")
+    length = float(np.linalg.norm(normal))
+    if length == 0.0:
+        raise InputValueError("initial[0]: expected a non-zero normal, got the zero vector")
+    normal, offset_n = normal / length, float(offset) / length
+    point = -offset_n * normal  # on the plane, input coordinates
+    return normal, (point - mu) / radius

@@ -12,23 +12,11 @@ import math
 import torch
 
 from torchsym.geometry.reflection import angles_to_normal, reflect_points, tangent_basis
+from torchsym.geometry.sampling import sphere_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.settings import InitSettings
 
 __all__ = ["grid_normals", "initial_normals", "score_normals", "sphere_normals"]
-
-
-def sphere_normals(count: int, *, dtype: torch.dtype = torch.float64) -> torch.Tensor:
-    """``(count, 3)`` near-uniform unit normals on the upper half sphere (Fibonacci lattice).
-
-    The half sphere holds one normal of every plane through the origin; ``count = 100``
-    leaves no plane much more than 10 degrees (the basin of thesis Sec. 5.2.3) from one.
-    """
-    i = torch.arange(count, dtype=dtype) + 0.5
-    z = 1.0 - i / count  # uniform in (0, 1]
-    r = torch.sqrt((1.0 - z * z).clamp_min(0))
-    phi = i * math.pi * (3.0 - math.sqrt(5.0))
-    return torch.stack([r * torch.cos(phi), r * torch.sin(phi), z], dim=1)
 
 
 def grid_normals(step_deg: float, dtype: torch.dtype) -> torch.Tensor:

@@ -10,10 +10,10 @@ import torch
 
 import torchsym
 from torchsym.core.registry import SOLVERS
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.geometry import plane_angle
 from torchsym.manifolds import SpecialOrthogonal
-from torchsym.pointset import PointSymm, PointSymmResult, point_symm
+from torchsym.pointset import PointSymm, PointSymmResult, PointSymmSettings, point_symm
 from torchsym.pointset.synthetic import make_symmetric_pointset
 from torchsym.pointset.transform import reflection_from_rotations
 
@@ -92,10 +92,10 @@ class TestPointSymm:
     def test_thesis_initialisation(self):
         # Sec. 7.2.4 as written: without noise in 6-D the first passing pairs are true pairs
         s = planted(60, 6, 11)
-        res = point_symm(s.points, init="thesis")
+        res = point_symm(s.points, init={"method": "thesis"})
         assert math.degrees(float(plane_angle(res.normal, s.normal))) < 1e-6
         assert torch.equal(res.permutation, s.correspondence)
-        again = point_symm(s.points, init="thesis")
+        again = point_symm(s.points, init={"method": "thesis"})
         assert torch.equal(res.normal, again.normal)
 
     def test_small_noise(self):
@@ -111,8 +111,8 @@ class TestPointSymm:
 
     def test_sparse_matches_exact(self):
         s = planted(60, 3, 10)
-        exact = point_symm(s.points, assignment="exact")
-        sparse = point_symm(s.points, assignment="sparse", n_neighbors=5)
+        exact = point_symm(s.points, assignment={"method": "exact"})
+        sparse = point_symm(s.points, assignment={"method": "sparse", "n_neighbors": 5})
         assert exact.assignment == "exact" and sparse.assignment == "sparse"
         assert torch.equal(exact.permutation, sparse.permutation)
         assert float(plane_angle(exact.normal, sparse.normal)) < 1e-8
@@ -136,35 +136,35 @@ class TestPointSymm:
         # sigma = 0.03 in the unit cube: on this set the thesis's single start (n_starts=1,
         # no scan) ends in a wrong plane; the pair search's other starts find it
         s = planted(300, 3, 506, sigma2=1e-3)
-        single = point_symm(s.points, n_starts=1, n_scan=0)
+        single = point_symm(s.points, init={"n_starts": 1}, scan={"enabled": False})
         assert math.degrees(float(plane_angle(single.normal, s.normal))) > 5.0
-        res = point_symm(s.points, n_scan=0)
+        res = point_symm(s.points, scan={"enabled": False})
         assert math.degrees(float(plane_angle(res.normal, s.normal))) < 2.0
         assert res.score > single.score
-        with pytest.raises(InputValueError, match="n_starts: expected an integer >= 1"):
-            point_symm(s.points, n_starts=0)
+        with pytest.raises(ConfigError, match="init.n_starts: expected an int >= 1"):
+            point_symm(s.points, init={"n_starts": 0})
 
     @pytest.mark.parametrize(("d", "seed", "sigma2"), [(3, 505, 1e-3), (3, 500, 3e-3), (6, 501, 1e-2)])
     def test_noisy_set_scan(self, d, seed, sigma2):
         # noise near the point spacing: every start of the pair search ends in a wrong
         # plane; the scan of planes through the centroid and the principal axes finds it
         s = make_symmetric_pointset(300, d, sigma2, generator=torch.Generator().manual_seed(seed))
-        without = point_symm(s.points, n_scan=0)
+        without = point_symm(s.points, scan={"enabled": False})
         assert math.degrees(float(plane_angle(without.normal, s.normal))) > 20.0
         res = point_symm(s.points)
         assert math.degrees(float(plane_angle(res.normal, s.normal))) < 5.0
         assert res.cost < without.cost
         again = point_symm(s.points)  # seeded: the same bits
         assert torch.equal(again.normal, res.normal) and torch.equal(again.permutation, res.permutation)
-        with pytest.raises(InputValueError, match="n_scan: expected an integer >= 0"):
-            point_symm(s.points, n_scan=-1)
-        with pytest.raises(InputValueError, match="n_scan_starts: expected an integer >= 1"):
-            point_symm(s.points, n_scan_starts=0)
+        with pytest.raises(ConfigError, match="scan.n_normals: expected an int >= 1"):
+            point_symm(s.points, scan={"n_normals": 0})
+        with pytest.raises(ConfigError, match="scan.n_starts: expected an int >= 1"):
+            point_symm(s.points, scan={"n_starts": 0})
 
     def test_scan_skipped_on_exact_symmetry_and_warm_start(self, monkeypatch):
         # an exact symmetry scores 1 after the pair search (at most match_fraction when only
         # that share may match): the scan does not run; nor after a caller's start
-        import torchsym.pointset.pointsymm as ps
+        import torchsym.pointset.solver as ps
 
         def fail(*args, **kwargs):
             raise AssertionError("the scan ran")
@@ -287,12 +287,14 @@ class TestPointSymm:
 
     def test_exception_settings(self):
         pts = planted(10, 2, 0).points
-        with pytest.raises(InputValueError, match="assignment: expected one of"):
-            point_symm(pts, assignment="lp")
-        with pytest.raises(InputValueError, match="match_fraction"):
+        with pytest.raises(ConfigError, match="assignment.method: expected one of"):
+            point_symm(pts, assignment={"method": "lp"})
+        with pytest.raises(ConfigError, match="match_fraction"):
             point_symm(pts, match_fraction=1.5)
-        with pytest.raises(InputValueError, match="init: expected one of 'search', 'thesis', got 'random'"):
-            point_symm(pts, init="random")
+        with pytest.raises(ConfigError, match="init.method: expected one of 'search', 'thesis', got 'random'"):
+            point_symm(pts, init={"method": "random"})
+        with pytest.raises(ConfigError, match="n_scan: unknown setting of PointSymmSettings"):
+            point_symm(pts, n_scan=0)
 
 
 class TestPointSymmModule:
@@ -304,11 +306,11 @@ class TestPointSymmModule:
 
     def test_forward_matches_function(self):
         s = planted(40, 3, 14)
-        module = PointSymm(n_runs=5, seed=3)
+        module = PointSymm(init={"n_runs": 5}, seed=3)
         a = module(s.points)
-        b = point_symm(s.points, n_runs=5, generator=gen(3))
+        b = point_symm(s.points, PointSymmSettings(init={"n_runs": 5}), generator=gen(3))
         assert torch.equal(a.normal, b.normal) and torch.equal(a.permutation, b.permutation)
-        assert "n_runs=5" in repr(module)
+        assert "init.n_runs=5" in repr(module)
 
     def test_forward_does_not_mutate(self):
         module = PointSymm()
@@ -317,8 +319,8 @@ class TestPointSymmModule:
         assert repr(module) == before
 
     def test_exception(self):
-        with pytest.raises(InputValueError, match="n_runs: expected an integer >= 1"):
-            PointSymm(n_runs=0)
+        with pytest.raises(ConfigError, match="init.n_runs: expected an int >= 1"):
+            PointSymm(init={"n_runs": 0})
 
     def test_config_builds(self):
         pipe = torchsym.build_pipeline(Path(__file__).resolve().parents[2] / "configs" / "pointset_pointsymm.yaml")
@@ -327,7 +329,7 @@ class TestPointSymmModule:
 
 
 def test_auto_assignment_exact_for_partial_sets():
-    # full matching: sparse above exact_max_points; with a cardinality limit, which the sparse
+    # full matching: sparse above max_exact_points; with a cardinality limit, which the sparse
     # solver only approximates, exact up to four times as many points
     s = planted(600, 3, 5)
     assert point_symm(s.points, generator=gen(0)).assignment == "sparse"
@@ -335,16 +337,17 @@ def test_auto_assignment_exact_for_partial_sets():
     assert 500 < cut.shape[0] <= 2000
     res = point_symm(cut, match_fraction=0.85, generator=gen(0))
     assert res.assignment == "exact"
-    assert point_symm(cut, match_fraction=0.85, exact_max_points=100, generator=gen(0)).assignment == "sparse"
+    assert point_symm(cut, match_fraction=0.85, assignment={"max_exact_points": 100}, generator=gen(0)).assignment == "sparse"
 
 
-def test_scan_runs_the_alternation_from_n_scan_starts_planes(monkeypatch):
-    # when the scan runs, the alternation starts from at most n_scan_starts scanned planes
+def test_scan_runs_the_alternation_from_scan_n_starts_planes(monkeypatch):
+    # when the scan runs, the alternation starts from at most scan.n_starts scanned planes
     # besides the pair search's starts, and normal_scan is asked for that many
-    import torchsym.pointset.pointsymm as ps
+    import torchsym.pointset.alternation as alt
+    import torchsym.pointset.solver as ps
 
     asked, runs = [], []
-    scan, alternate = ps.normal_scan, ps._alternate
+    scan, alternate = ps.normal_scan, alt.alternate
 
     def counting_scan(*args, **kwargs):
         asked.append(kwargs["n_keep"])
@@ -357,14 +360,58 @@ def test_scan_runs_the_alternation_from_n_scan_starts_planes(monkeypatch):
         return alternate(*args, **kwargs)
 
     monkeypatch.setattr(ps, "normal_scan", counting_scan)
-    monkeypatch.setattr(ps, "_alternate", counting_alternate)
+    monkeypatch.setattr(alt, "alternate", counting_alternate)
     s = planted(300, 3, 500, sigma2=3e-3)
     for k in (1, 3):
         asked.clear()
         runs.clear()
-        point_symm(s.points, n_scan_starts=k)
+        point_symm(s.points, scan={"n_starts": k})
         assert asked == [k]
         i = [kind for kind, _ in runs].index("scan")
         n_scanned = runs[i][1]
         assert 1 <= n_scanned <= k
         assert sum(1 for r in runs[i + 1 :] if r[0] == "run") == n_scanned
+
+
+class TestSizeLimits:
+    def test_transposed_cloud_refused(self):
+        # a (3, 4000) cloud read as 3 points in 4000-D: refused at once, the transpose suggested
+        pts = torch.rand(3, 4000, generator=gen(0), dtype=DT)
+        with pytest.raises(InputShapeError, match=r"points: expected \(N, D\) with D <= max_dim = 512, got \(3, 4000\); .*points\.T"):
+            point_symm(pts)
+
+    def test_high_dimension_refused(self):
+        pts = torch.rand(20, 2000, generator=gen(1), dtype=DT)
+        with pytest.raises(InputShapeError, match="max_dim = 512.*transposed"):
+            point_symm(pts)
+        with pytest.raises(InputShapeError, match="max_dim = 8, got \\(20, 9\\)$"):
+            point_symm(torch.rand(20, 9, generator=gen(1), dtype=DT)[:, :9], max_dim=8)  # N > D: no transpose hint
+
+    def test_too_many_points_refused(self):
+        pts = torch.rand(20_001, 3, generator=gen(2), dtype=DT)
+        with pytest.raises(InputShapeError, match="points: expected N <= max_points = 10000, got \\(20001, 3\\); subsample"):
+            point_symm(pts)
+        with pytest.raises(InputShapeError, match="max_points = 50"):
+            PointSymm(max_points=50)(planted(60, 2, 0).points)
+
+    def test_limits_are_settings(self):
+        s = planted(40, 3, 0)
+        assert torch.equal(point_symm(s.points, max_points=40, max_dim=3).permutation, point_symm(s.points).permutation)
+        with pytest.raises(ConfigError, match="max_dim: expected an int >= 2"):
+            PointSymmSettings(max_dim=1)
+
+
+class TestSettings:
+    def test_defaults_are_the_module_defaults(self):
+        assert PointSymm().settings == PointSymmSettings()
+        assert PointSymmSettings().init.eps_theta == 2.0  # degrees
+
+    def test_yaml_nested_groups(self, tmp_path):
+        cfg = tmp_path / "c.yaml"
+        cfg.write_text("input: points\nsteps:\n  - name: pointsymm\n    params:\n      init: {n_runs: 3}\n      scan: {enabled: false}\n")
+        pipe = torchsym.build_pipeline(cfg)
+        s = planted(30, 3, 1)
+        assert torch.equal(pipe(s.points).permutation, point_symm(s.points, init={"n_runs": 3}, scan={"enabled": False}).permutation)
+        cfg.write_text("input: points\nsteps:\n  - name: pointsymm\n    params:\n      init: {n_run: 3}\n")
+        with pytest.raises(ConfigError, match="init.n_run: unknown setting.*n_runs"):
+            torchsym.build_pipeline(cfg)

@@ -8,13 +8,8 @@ import pytest
 import torch
 
 from torchsym.core.registry import SOLVERS
-from torchsym.errors import InputShapeError, InputValueError
-from torchsym.pointset import (
-    ImageAxisResult,
-    PointSymmImage,
-    harris_corners,
-    pointsymm_image,
-)
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
+from torchsym.image import ImageAxisResult, PointSymmImage, PointSymmImageSettings, point_symm_image
 
 
 def symmetric_image(seed: int = 0, size: int = 96, clutter: bool = True) -> torch.Tensor:
@@ -31,40 +26,45 @@ def symmetric_image(seed: int = 0, size: int = 96, clutter: bool = True) -> torc
     return img
 
 
-class TestHarrisCorners:
-    def test_corners_of_square(self):
-        img = torch.zeros(40, 40)
-        img[10:30, 10:30] = 1.0
-        c = harris_corners(img, n_corners=10)
-        assert c.shape[1] == 2 and 4 <= c.shape[0] <= 10
-        assert bool(((c - 19.5).abs() > 5).all())  # every corner sits near a corner of the square
-
-    def test_exception(self):
-        with pytest.raises(InputShapeError, match=r"image: expected a single image \(B = 1\)"):
-            harris_corners(torch.zeros(2, 1, 10, 10))
-
-
 class TestPointSymmImage:
     def test_axis(self):
-        res = pointsymm_image(symmetric_image(0))
+        res = point_symm_image(symmetric_image(0))
         assert isinstance(res, ImageAxisResult)
         assert math.degrees(math.acos(min(1.0, abs(float(res.normal[0]))))) < 0.5
         assert abs(abs(float(res.offset)) - 47.5) < 1.0
         assert res.score > 0.7 and res.segment.shape == (2, 2)
 
     def test_seeded(self):
-        a, b = pointsymm_image(symmetric_image(1)), pointsymm_image(symmetric_image(1))
+        a, b = point_symm_image(symmetric_image(1)), point_symm_image(symmetric_image(1))
         assert torch.equal(a.normal, b.normal) and torch.equal(a.inliers, b.inliers)
 
     def test_exception(self):
         with pytest.raises(InputValueError, match="image: expected at least 4 Harris corners, found 0"):
-            pointsymm_image(torch.zeros(32, 32))
-        with pytest.raises(InputValueError, match="sample_fraction"):
-            pointsymm_image(symmetric_image(0), sample_fraction=2.0)
+            point_symm_image(torch.zeros(32, 32))
+        with pytest.raises(ConfigError, match="ransac.sample_fraction: expected a finite number > 0.0 and <= 1.0"):
+            point_symm_image(symmetric_image(0), ransac={"sample_fraction": 2.0})
+
+    @pytest.mark.parametrize("size", [(3, 3), (16, 16), (31, 64)])
+    def test_small_image_refused(self, size):
+        # like the other image solvers: a side under 32 px is refused (noise of 16 x 16 scored 1.0)
+        noise = torch.rand(1, *size, generator=torch.Generator().manual_seed(0))
+        with pytest.raises(InputShapeError, match=r"image: expected height and width >= 32"):
+            point_symm_image(noise)
 
     def test_module_registered(self):
         entry = SOLVERS.get("pointsymm_image")
         assert entry.cls is PointSymmImage and entry.kind == "image"
         assert SOLVERS.default_for("image").name != "pointsymm_image"
-        res = PointSymmImage(ransac_iters=5)(symmetric_image(2))
-        assert abs(abs(float(res.normal[0])) - 1) < 1e-3
+        module = PointSymmImage(ransac={"n_iters": 5})
+        res = module(symmetric_image(2))
+        assert abs(abs(float(res.normal[0])) - 1) < 1e-3 and res.iterations == 5
+        assert torch.equal(res.normal, point_symm_image(symmetric_image(2), ransac={"n_iters": 5}).normal)
+        assert module.settings == PointSymmImageSettings(ransac={"n_iters": 5}) and "ransac.n_iters=5" in repr(module)
+
+    def test_config_builds(self):
+        from pathlib import Path
+
+        import torchsym
+
+        pipe = torchsym.build_pipeline(Path(__file__).resolve().parents[2] / "configs" / "image_pointsymm.yaml")
+        assert isinstance(pipe(symmetric_image(0)), ImageAxisResult)
