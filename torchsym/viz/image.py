@@ -71,13 +71,13 @@ def _figure(rgb: np.ndarray, result: ReflectionAxesResult, top: int, faint: int,
                    edgecolors="black", linewidths=0.4, zorder=3)
     for i in range(min(k, top) - 1, -1, -1):  # the best last, on top
         x1, y1, x2, y2 = axes[i]
+        ax.plot([x1, x2], [y1, y2], color=COLOURS[i % len(COLOURS)], lw=lw * (1.4 if i == 0 else 1.0),
+                solid_capstyle="round", path_effects=outline, zorder=4)
+    for i, (lx, ly) in enumerate(_label_positions(axes[:top], w, h, scale)):
         colour = COLOURS[i % len(COLOURS)]
-        ax.plot([x1, x2], [y1, y2], color=colour, lw=lw * (1.4 if i == 0 else 1.0), solid_capstyle="round",
-                path_effects=outline, zorder=4)
-        lx, ly = (x1, y1) if y1 <= y2 else (x2, y2)  # label at the upper end
         ax.annotate(f"{i + 1}", (lx, ly), color="black", fontsize=11, fontweight="bold", ha="center", va="center",
                     bbox=dict(boxstyle="circle,pad=0.25", fc=colour, ec="black", lw=1.0), zorder=6)
-        ax.annotate(f"{_fmt(scores[i])}", (lx, ly), xytext=(14, 0), textcoords="offset points", color="white",
+        ax.annotate(f"{_fmt(scores[i])}", (lx, ly), xytext=(10, 9), textcoords="offset points", color="white",
                     fontsize=10, va="center", path_effects=[pe.withStroke(linewidth=2.5, foreground="black")], zorder=6)
     if title:
         shown = min(k, top)
@@ -87,6 +87,29 @@ def _figure(rgb: np.ndarray, result: ReflectionAxesResult, top: int, faint: int,
         fig.text(0.01, 1.0 - 0.175 / fig.get_figheight(), text if k else f"{result.method}: no axis found",
                  fontsize=10, va="center")
     return fig, plt
+
+
+def _label_positions(axes: np.ndarray, w: int, h: int, scale: float) -> list[tuple[float, float]]:
+    """Where to put each axis's number: on its segment ``axes (K, 4)``, from the upper end
+    down, at the first place whose label box (number and score, in drawn pixels) is inside
+    the picture and clear of the labels placed before."""
+    box_l, box_r, box_h = 14 / scale, 75 / scale, 22 / scale  # extent around the anchor, image px
+    placed: list[tuple[float, float]] = []
+    for x1, y1, x2, y2 in axes:
+        if y1 > y2:
+            x1, y1, x2, y2 = x2, y2, x1, y1
+        best = None
+        for t in np.linspace(0.0, 1.0, 21):
+            x, y = x1 + t * (x2 - x1), y1 + t * (y2 - y1)
+            inside = box_l <= x + 0.5 and x + box_r <= w - 0.5 and box_h <= y + 0.5 and y + box_h <= h - 0.5
+            clear = all(abs(y - py) > 2 * box_h or x + box_r < px - box_l or x - box_l > px + box_r for px, py in placed)
+            if inside and clear:
+                best = (x, y)
+                break
+            if best is None and clear:
+                best = (x, y)
+        placed.append(best if best is not None else (x1, y1))
+    return placed
 
 
 def _fmt(score: float) -> str:
