@@ -212,20 +212,7 @@ def axis_evidence(
             setting out of range.
     """
 
-    gx, gy = np.asarray(gx), np.asarray(gy)
-    if gx.ndim != 2 or gy.shape != gx.shape:
-        raise InputShapeError(f"gx, gy: expected two (H, W) arrays of one shape, got {gx.shape} and {gy.shape}")
-    ln = np.asarray(line, dtype=np.float64).reshape(-1)
-    if ln.shape != (3,):
-        raise InputShapeError(f"line: expected (3,) a, b, c, got shape {np.asarray(line).shape}")
-    norm = float(np.hypot(ln[0], ln[1])) if np.isfinite(ln).all() else float("nan")
-    if not norm > 0:
-        raise InputValueError(f"line: expected finite (a, b, c) with (a, b) != 0, got {ln.tolist()}")
-    pairs = np.asarray(pairs, dtype=np.float64)
-    if pairs.ndim != 2 or pairs.shape[1] != 4:
-        raise InputShapeError(f"pairs: expected (M, 4) x1, y1, x2, y2, got shape {pairs.shape}")
-    if pairs.shape[0] == 0 or not np.isfinite(pairs).all():
-        raise InputValueError(f"pairs: expected at least one finite pair, got {pairs.shape[0]} (finite: {np.isfinite(pairs).all()})")
+    gx, gy, ln, norm, pairs = _check_inputs(gx, gy, line, pairs)
     for name, val in (("min_half_width", min_half_width), ("min_offset", min_offset), ("edge_fraction", edge_fraction)):
         check_positive(val, name, allow_zero=True)
     step, bin_length = check_positive(step, "step"), check_positive(bin_length, "bin_length")
@@ -253,26 +240,7 @@ def axis_evidence(
     if full is None:
         return AxisEvidence(0.0, 0.0, (t0, t1))
     f0, f1 = sorted(((np.array(full[:2]) - foot) @ d, (np.array(full[2:]) - foot) @ d))
-    t_in = t0 + step * np.arange(int((t1 - t0) // step) + 1)
-    t_up = t1 + step * (0.5 + np.arange(max(math.ceil((f1 - t1) / step), 0)))
-    t_down = t0 - step * (0.5 + np.arange(max(math.ceil((t0 - f0) / step), 0)))
-    ts = np.concatenate([t_in, t_up, t_down])
-    part = np.concatenate([np.zeros(t_in.size), np.ones(t_up.size), np.full(t_down.size, 2)]).astype(np.int8)
-    ss = np.arange(min_offset, width + 1e-9, step)
-    ss = np.concatenate([-ss[::-1], ss])
-    p = (foot + ts[:, None, None] * d + ss[None, :, None] * n).reshape(-1, 2)  # (T * S, 2)
-    tt = np.repeat(ts, ss.size)
-    part = np.repeat(part, ss.size)
-    gpx, gpy = _bilinear(gx, p[:, 0], p[:, 1]), _bilinear(gy, p[:, 0], p[:, 1])
-    # the offsets are symmetric (ss[j] = -ss[S - 1 - j]), so the mirror point of each
-    # sample is the sample in the mirrored column: its gradient is already sampled
-    qx, qy = (v.reshape(ts.size, ss.size)[:, ::-1].reshape(-1) for v in (gpx, gpy))
-    dn = qx * a + qy * b
-    rx, ry = qx - 2 * dn * a, qy - 2 * dn * b  # R g(p')
-    ok = np.isfinite(gpx) & np.isfinite(rx)
-    gpx, gpy, rx, ry = (np.where(ok, v, 0.0) for v in (gpx, gpy, rx, ry))
-    dot2 = 2 * (gpx * rx + gpy * ry)
-    g2, r2 = gpx * gpx + gpy * gpy, rx * rx + ry * ry
+    tt, part, dot2, g2, r2, ok = _mirrored_band(gx, gy, (a, b), foot, (t0, t1), (f0, f1), width, min_offset, step)
     energy = g2 + r2
     inside = ok & (part == 0)
     area = float(inside.sum()) * step * step / (h * w)
@@ -300,6 +268,60 @@ def axis_evidence(
             mids = (0.5 * (pairs[:, :2] + pairs[:, 2:]) - foot) @ d  # (M,)
             lo, hi = _trim_to_crossings(gx, gy, foot, d, n, (lo, hi), mids, level, bin_length)
     return AxisEvidence(symmetry, area, (float(lo), float(hi)))
+
+
+def _check_inputs(gx: Any, gy: Any, line: Any, pairs: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """The arrays of :func:`axis_evidence` checked: ``gx, gy, line (3,), |(a, b)|, pairs (M, 4)``."""
+    gx, gy = np.asarray(gx), np.asarray(gy)
+    if gx.ndim != 2 or gy.shape != gx.shape:
+        raise InputShapeError(f"gx, gy: expected two (H, W) arrays of one shape, got {gx.shape} and {gy.shape}")
+    ln = np.asarray(line, dtype=np.float64).reshape(-1)
+    if ln.shape != (3,):
+        raise InputShapeError(f"line: expected (3,) a, b, c, got shape {np.asarray(line).shape}")
+    norm = float(np.hypot(ln[0], ln[1])) if np.isfinite(ln).all() else float("nan")
+    if not norm > 0:
+        raise InputValueError(f"line: expected finite (a, b, c) with (a, b) != 0, got {ln.tolist()}")
+    pairs = np.asarray(pairs, dtype=np.float64)
+    if pairs.ndim != 2 or pairs.shape[1] != 4:
+        raise InputShapeError(f"pairs: expected (M, 4) x1, y1, x2, y2, got shape {pairs.shape}")
+    if pairs.shape[0] == 0 or not np.isfinite(pairs).all():
+        raise InputValueError(f"pairs: expected at least one finite pair, got {pairs.shape[0]} (finite: {np.isfinite(pairs).all()})")
+    return gx, gy, ln, norm, pairs
+
+
+def _mirrored_band(
+    gx: np.ndarray, gy: np.ndarray, normal: tuple[float, float], foot: np.ndarray, support: tuple[float, float],
+    full: tuple[float, float], width: float, min_offset: float, step: float,
+) -> tuple[np.ndarray, ...]:
+    """Gradients sampled on the band around the line and at their mirror points.
+
+    Rows every ``step`` along the line: inside the support ``[t0, t1]`` (part 0), beyond
+    ``t1`` (1) and before ``t0`` (2) up to the image's ``full`` extent; offsets
+    ``min_offset .. width`` on both sides. Returns per sample ``t``, ``part``,
+    ``2 g . R g'``, ``|g|^2``, ``|R g'|^2`` and ``ok`` (both points in the image).
+    """
+    a, b = normal
+    n, d = np.array([a, b]), np.array([-b, a])
+    (t0, t1), (f0, f1) = support, full
+    t_in = t0 + step * np.arange(int((t1 - t0) // step) + 1)
+    t_up = t1 + step * (0.5 + np.arange(max(math.ceil((f1 - t1) / step), 0)))
+    t_down = t0 - step * (0.5 + np.arange(max(math.ceil((t0 - f0) / step), 0)))
+    ts = np.concatenate([t_in, t_up, t_down])
+    part = np.concatenate([np.zeros(t_in.size), np.ones(t_up.size), np.full(t_down.size, 2)]).astype(np.int8)
+    ss = np.arange(min_offset, width + 1e-9, step)
+    ss = np.concatenate([-ss[::-1], ss])
+    p = (foot + ts[:, None, None] * d + ss[None, :, None] * n).reshape(-1, 2)  # (T * S, 2)
+    tt = np.repeat(ts, ss.size)
+    part = np.repeat(part, ss.size)
+    gpx, gpy = _bilinear(gx, p[:, 0], p[:, 1]), _bilinear(gy, p[:, 0], p[:, 1])
+    # the offsets are symmetric (ss[j] = -ss[S - 1 - j]), so the mirror point of each
+    # sample is the sample in the mirrored column: its gradient is already sampled
+    qx, qy = (v.reshape(ts.size, ss.size)[:, ::-1].reshape(-1) for v in (gpx, gpy))
+    dn = qx * a + qy * b
+    rx, ry = qx - 2 * dn * a, qy - 2 * dn * b  # R g(p')
+    ok = np.isfinite(gpx) & np.isfinite(rx)
+    gpx, gpy, rx, ry = (np.where(ok, v, 0.0) for v in (gpx, gpy, rx, ry))
+    return tt, part, 2 * (gpx * rx + gpy * ry), gpx * gpx + gpy * gpy, rx * rx + ry * ry, ok
 
 
 def _split_support(
