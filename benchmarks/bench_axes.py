@@ -38,10 +38,10 @@ sys.path.insert(0, str(HERE))
 from loy_eklundh import loy_eklundh_axes
 
 from torchsym.image import boundary_clique_axes, ksymmetry_axes
-from torchsym.image.axes import draw_axes
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.io import read_image
 from torchsym.metrics.axes import evaluate_axes, match_axes
+from torchsym.viz.image import draw_axes
 
 log = logging.getLogger("bench_axes")
 METHODS = {
@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
             if len(grid_rows) <= list(METHODS).index(label):
                 grid_rows.append([])
             if len(grid_rows[-1]) < 6:
-                grid_rows[-1].append(draw_axes(img, res.axes[:1], None, None))
+                grid_rows[-1].append(draw_axes(img, res, top=1, faint=0, n_pairs=0))
         row: dict = {"n_images": len(dev)}
         if dev:
             for crit in ("thesis", "challenge"):

@@ -20,7 +20,7 @@ import torch
 from torchsym.core.checks import check_image
 from torchsym.features.mirror_pairs import mirror_distance_matrix
 from torchsym.features.sift import detect_sift
-from torchsym.image.axes import ReflectionAxesResult, build_result, empty_result
+from torchsym.image.results import ReflectionAxesResult, build_result, empty_result
 
 __all__ = ["loy_eklundh_axes"]
 

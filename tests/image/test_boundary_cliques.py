@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputValueError
+from torchsym.errors import ConfigError, InputValueError
 from torchsym.image import (
     BoundaryCliqueDetector,
     ReflectionAxesBatch,
@@ -14,7 +14,7 @@ from torchsym.image import (
     boundary_clique_axes,
 )
 from torchsym.image.boundary import boundary_curves, remove_junctions
-from torchsym.image.boundary_cliques import _vertex_cover_highs_zeros, _vertex_cover_lp_zeros, dominant_clique
+from torchsym.image.boundary_cliques.cliques import _vertex_cover_highs_zeros, _vertex_cover_lp_zeros, dominant_clique
 from torchsym.metrics.axes import match_axes
 
 
@@ -39,8 +39,8 @@ class TestBoundaryCliqueAxes:
 
     def test_deterministic(self, single_objects):
         img, _ = single_objects[2]
-        a = boundary_clique_axes(img, max_pairs=30, generator=torch.Generator().manual_seed(5))
-        b = boundary_clique_axes(img, max_pairs=30, generator=torch.Generator().manual_seed(5))
+        a = boundary_clique_axes(img, max_boundary_pairs=30, generator=torch.Generator().manual_seed(5))
+        b = boundary_clique_axes(img, max_boundary_pairs=30, generator=torch.Generator().manual_seed(5))
         assert torch.equal(a.axes, b.axes) and torch.equal(a.pairs, b.pairs)
 
     def test_canny_linking(self, single_objects):
@@ -64,16 +64,16 @@ class TestBoundaryCliqueAxes:
         img, _ = mirrored_objects_image(1)
         res = boundary_clique_axes(img)
         assert set(res.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques", "sift"}
-        plain = boundary_clique_axes(img, sift_candidates=False)
+        plain = boundary_clique_axes(img, sift={"enabled": False})
         assert set(plain.info["stage_seconds"]) == {"edges", "segments", "pairs", "graph", "cliques"}
         assert sum(res.info["stage_seconds"].values()) <= res.info["seconds"] + 1e-6
-        again = boundary_clique_axes(img, clique_solver="highs")
+        again = boundary_clique_axes(img, cliques={"solver": "highs"})
         assert again.axes.shape[0] >= 1
 
     def test_exception(self):
-        with pytest.raises(InputValueError, match="edges: expected 'canny' or 'edge_drawing', got 'sobel'"):
-            BoundaryCliqueDetector(edges="sobel")
-        with pytest.raises(InputValueError, match="theta: expected a positive number"):
+        with pytest.raises(ConfigError, match="edges.detector: expected one of 'edge_drawing', 'canny', got 'sobel'"):
+            BoundaryCliqueDetector(edges={"detector": "sobel"})
+        with pytest.raises(ConfigError, match=r"theta: expected a finite number > 0.0 and <= 180.0, got -1.0"):
             boundary_clique_axes(torch.rand(3, 32, 32), theta=-1.0)
 
 
@@ -93,8 +93,8 @@ class TestDominantClique:
     def test_bad_solver(self):
         with pytest.raises(InputValueError, match="solver: expected one of 'matching', 'highs', got 'glpk'"):
             dominant_clique(np.ones((3, 3), dtype=bool), solver="glpk")
-        with pytest.raises(InputValueError, match="clique_solver: expected one of 'matching', 'highs'"):
-            BoundaryCliqueDetector(clique_solver="glpk")
+        with pytest.raises(ConfigError, match="cliques.solver: expected one of 'matching', 'highs'"):
+            BoundaryCliqueDetector(cliques={"solver": "glpk"})
 
     def test_empty(self):
         clique, _ = dominant_clique(np.zeros((4, 4), dtype=bool))

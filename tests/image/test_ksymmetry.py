@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from torchsym.errors import InputValueError
+from torchsym.errors import ConfigError
 from torchsym.image import KSymmetryDetector, ksymmetry_axes
 from torchsym.image.ksymmetry import ksymmetry_clustering
 from torchsym.metrics.axes import match_axes
@@ -74,16 +74,16 @@ class TestKSymmetryAxes:
     def test_planted_axes_random_angles(self, single_objects):
         hits = 0
         for img, gt in single_objects:
-            res = ksymmetry_axes(img, num_features=400)
+            res = ksymmetry_axes(img, pairs={"max_keypoints": 400})
             hits += bool(match_axes(res.axes[:3], gt, image_size=(240, 240), criterion="challenge").any())
         assert hits >= 4
 
     def test_module(self):
-        m = KSymmetryDetector(k1=2, max_axes=3)
-        assert "k1=2" in repr(m)
+        m = KSymmetryDetector(pairs={"k1": 2}, max_axes=3)
+        assert "pairs.k1=2" in repr(m) and "max_axes=3" in repr(m)
 
     def test_exception(self):
-        with pytest.raises(InputValueError, match="eps_theta: expected a positive number"):
+        with pytest.raises(ConfigError, match="eps_theta: expected a finite number > 0.0"):
             KSymmetryDetector(eps_theta=0.0)
-        with pytest.raises(InputValueError, match="k1: expected an integer >= 1"):
-            ksymmetry_axes(torch.rand(1, 32, 32), k1=0)
+        with pytest.raises(ConfigError, match="pairs.k1: expected an int or null >= 1, got 0"):
+            ksymmetry_axes(torch.rand(1, 32, 32), pairs={"k1": 0})

@@ -1,14 +1,16 @@
 """Reflection symmetry in photographs (thesis Ch. 2-4)."""
 
-from torchsym.image.axes import ReflectionAxesBatch, ReflectionAxesResult
-from torchsym.image.boundary_cliques import BoundaryCliqueDetector, boundary_clique_axes
-from torchsym.image.ksymmetry import KSymmetryDetector, ksymmetry_axes
+from torchsym.image.boundary_cliques import BoundaryCliqueDetector, BoundaryCliquesSettings, boundary_clique_axes
+from torchsym.image.ksymmetry import KSymmetryDetector, KSymmetrySettings, ksymmetry_axes
+from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult
 from torchsym.image.symmslic import SymmSlic, SymmSlicResult, symm_slic
 from torchsym.image.pointsymm_axis import ImageAxisResult, PointSymmImage, PointSymmImageSettings, point_symm_image
 
 __all__: list[str] = [
     "BoundaryCliqueDetector",
+    "BoundaryCliquesSettings",
     "KSymmetryDetector",
+    "KSymmetrySettings",
     "ReflectionAxesBatch",
     "ReflectionAxesResult",
     "SymmSlic",

@@ -1,4 +1,4 @@
-"""Dense mirror-gradient evidence of an axis: its score and extent (torchsym.image.axes.axis_evidence)."""
+"""Dense mirror-gradient evidence of an axis: its score and extent (torchsym.image.evidence)."""
 
 from __future__ import annotations
 
@@ -9,15 +9,10 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image import boundary_clique_axes
-from torchsym.image.axes import (
-    EDGE_NOISE,
-    axis_evidence,
-    clip_line_to_image,
-    gradient_noise,
-    mirror_gradients,
-)
+from torchsym.image.evidence import EDGE_NOISE, axis_evidence, gradient_noise, mirror_gradients
+from torchsym.image.lines import clip_line_to_image
 
 
 def _rotation(angle: float, centre=(100.0, 100.0)) -> np.ndarray:
@@ -276,8 +271,8 @@ class TestScores:
     def test_segments_are_the_grown_extents(self, single_objects):
         """Each axis is its line clipped to the extent axis_evidence reports, and the score is built from it."""
         img, _ = single_objects[0]
-        res = boundary_clique_axes(img, sift_candidates=False)
-        plain = boundary_clique_axes(img, grow_threshold=None, sift_candidates=False)
+        res = boundary_clique_axes(img, sift={"enabled": False})
+        plain = boundary_clique_axes(img, grow_threshold=None, sift={"enabled": False})
         assert torch.equal(res.lines, plain.lines) and len(res) >= 2
         gx, gy = mirror_gradients(img.mean(0).numpy())
         noise = EDGE_NOISE * gradient_noise(gx, gy)  # the image's noise level, as the detector sets it
@@ -294,7 +289,7 @@ class TestScores:
 
     def test_axes_without_evidence_are_dropped(self, single_objects):
         img, _ = single_objects[0]
-        res = boundary_clique_axes(img, sift_candidates=False)
+        res = boundary_clique_axes(img, sift={"enabled": False})
         every = boundary_clique_axes(img, score="support")
         assert bool((res.scores > 0).all())
         assert len(res) + res.info["axes_without_evidence"] == len(every)
@@ -305,5 +300,5 @@ class TestScores:
     @pytest.mark.parametrize(("kw", "name"), [({"score": "votes"}, "score"), ({"grow_threshold": 2.0}, "grow_threshold"),
                                               ({"grow_threshold": True}, "grow_threshold")])
     def test_bad_settings(self, kw, name):
-        with pytest.raises(InputValueError, match=name):
+        with pytest.raises(ConfigError, match=name):
             boundary_clique_axes(torch.rand(3, 32, 32), **kw)

@@ -1,5 +1,5 @@
-"""Candidate axes from mirror pairs, their runs along a line, duplicate suppression, and the
-mirrored-SIFT candidates of method (b) (torchsym.image.axes, torchsym.image.ksymmetry)."""
+"""Candidate axes from mirror pairs, their runs along a line, and the mirrored-SIFT candidates
+of method (b) (torchsym.image.candidates)."""
 
 from __future__ import annotations
 
@@ -9,15 +9,10 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image import boundary_clique_axes, ksymmetry_axes
-from torchsym.image.axes import (
-    axis_evidence,
-    mirror_gradients,
-    support_runs,
-    suppress_duplicates,
-)
-from torchsym.image.ksymmetry import mirror_pair_candidates
+from torchsym.image.candidates import mirror_pair_candidates, support_runs
+from torchsym.image.evidence import _grow, axis_evidence, mirror_gradients
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.metrics.axes import match_axes
 
@@ -51,24 +46,6 @@ class TestSupportRuns:
         assert support_runs(line, pairs, np.arange(6), gap=100.0)[0].size == 6
         assert support_runs(line, pairs, np.array([3, 0]), gap=20.0)[0].tolist() == [0]
         assert support_runs(line, pairs, np.zeros(0, np.int64), gap=20.0) == []
-
-
-class TestSuppressDuplicates:
-    def test_same_object_kept_once(self):
-        base = _line(0.0, (100, 100))
-        near = _line(4.0, (100, 103))  # 4 deg and 3 px off, same stretch of the line
-        assert suppress_duplicates([base, near], [(-50.0, 50.0), (-45.0, 55.0)], [1.0, 2.0]) == [1]
-        assert suppress_duplicates([base, near], [(-50.0, 50.0), (-45.0, 55.0)], [3.0, 2.0]) == [0]
-
-    def test_distinct_axes_kept(self):
-        base = _line(0.0, (100, 100))
-        cases = [
-            (_line(20.0, (100, 100)), (-50.0, 50.0)),  # turned beyond 10 deg
-            (_line(0.0, (130, 100)), (-50.0, 50.0)),  # parallel, 30 px away
-            (base.copy(), (80.0, 160.0)),  # same line, another object further along it
-        ]
-        for other, extent in cases:
-            assert suppress_duplicates([base, other], [(-50.0, 50.0), extent], [2.0, 1.0]) == [0, 1]
 
 
 class TestMirrorPairCandidates:
@@ -142,7 +119,7 @@ class TestSiftCandidates:
         """The synthetic image whose two small objects have no boundary pairs: SIFT pairs find them."""
         img, gt = mirrored_objects_image(3, generator=torch.Generator().manual_seed(1003))
         res = boundary_clique_axes(img)
-        plain = boundary_clique_axes(img, sift_candidates=False)
+        plain = boundary_clique_axes(img, sift={"enabled": False})
         hit = match_axes(res.axes, gt, image_size=(360, 480), scores=res.scores, criterion="challenge")
         hit_plain = match_axes(plain.axes, gt, image_size=(360, 480), scores=plain.scores, criterion="challenge")
         assert int(hit.sum()) == 3 and int(hit_plain.sum()) < 3
@@ -152,12 +129,12 @@ class TestSiftCandidates:
 
     def test_settings(self):
         img = torch.rand(3, 48, 48)
-        with pytest.raises(InputValueError, match="sift_candidates"):
-            boundary_clique_axes(img, score="support", sift_candidates=True)
-        with pytest.raises(InputValueError, match="sift_candidates"):
-            boundary_clique_axes(img, sift_candidates="yes")
-        with pytest.raises(InputValueError, match="sift_weight"):
-            boundary_clique_axes(img, sift_weight=0.0)
+        with pytest.raises(ConfigError, match="sift.enabled"):
+            boundary_clique_axes(img, score="support", sift={"enabled": True})
+        with pytest.raises(ConfigError, match="sift.enabled"):
+            boundary_clique_axes(img, sift={"enabled": "yes"})
+        with pytest.raises(ConfigError, match="sift.weight"):
+            boundary_clique_axes(img, sift={"weight": 0.0})
         assert "sift" not in boundary_clique_axes(img, score="support").info["stage_seconds"]
 
 
@@ -173,9 +150,9 @@ class TestKSymmetryGradientScore:
         assert "axes_without_evidence" in res.info and "axes_without_evidence" not in thesis.info
 
     def test_bad_score(self):
-        with pytest.raises(InputValueError, match="score"):
+        with pytest.raises(ConfigError, match="score"):
             ksymmetry_axes(torch.rand(1, 32, 32), score="votes")
-        with pytest.raises(InputValueError, match="grow_threshold"):
+        with pytest.raises(ConfigError, match="grow_threshold"):
             ksymmetry_axes(torch.rand(1, 32, 32), score="gradient", grow_threshold=3.0)
 
 
@@ -183,8 +160,6 @@ class TestReviewedEdges:
     """Cases a mutation review found unpinned."""
 
     def test_grow_gap_boundaries(self):
-        from torchsym.image.axes import _grow
-
         t = np.arange(6) * 4.0 + 1.0  # one sample per 4-px bin, bins 0..5
         gain = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 5.0])
         strong = gain != 0
@@ -195,19 +170,6 @@ class TestReviewedEdges:
         assert _grow(np.array([1.0, 5.0]), first_empty, 4.0, first_empty != 0, 0) == 0.0  # gap at bin 0
         assert _grow(np.array([1.0, 5.0]), first_empty, 4.0, first_empty != 0, 1) == 8.0
         assert _grow(t, gain, 4.0, strong, 10**9) == 24.0  # a huge max_gap allocates nothing large
-
-    def test_duplicates_by_angle_and_containment(self):
-        base = _line(0.0, (100, 100))
-        turned = _line(30.0, (100, 100))  # same centre, 30 deg apart
-        assert suppress_duplicates([base, turned], [(-50.0, 50.0), (-50.0, 50.0)], [2.0, 1.0]) == [0, 1]
-        # a short segment inside the end of a long one on the same line is the same axis
-        assert suppress_duplicates([base, base.copy()], [(-100.0, 100.0), (60.0, 100.0)], [2.0, 1.0]) == [0]
-        with pytest.raises(InputShapeError, match="lines, extents, scores"):
-            suppress_duplicates([base], [(-1.0, 1.0)], [1.0, 2.0])
-        with pytest.raises(InputShapeError, match="lines"):
-            suppress_duplicates([base[:2]], [(-1.0, 1.0)], [1.0])
-        with pytest.raises(InputValueError, match="angle"):
-            suppress_duplicates([base], [(-1.0, 1.0)], [1.0], angle=-1.0)
 
     def test_support_runs_bad_input(self):
         line = _line(0.0, (100, 100))
@@ -243,7 +205,7 @@ class TestReviewedEdges:
             assert float((mid @ res.lines[k, :2].double() + res.lines[k, 2]).abs().max()) < 10.0  # on its own line
             sift_axes += bool((idx >= n_bnd).all())
         assert sift_axes >= 1
-        half = boundary_clique_axes(img, sift_weight=0.25)
+        half = boundary_clique_axes(img, sift={"weight": 0.25})
         full = {tuple(ln): s for ln, s in zip(res.lines.tolist(), res.scores.tolist())}
         scaled = [(s, full[tuple(ln)]) for ln, s, k in zip(half.lines.tolist(), half.scores.tolist(), range(len(half)))
                   if tuple(ln) in full and bool((half.pair_axis == k).any()) and
@@ -252,7 +214,7 @@ class TestReviewedEdges:
 
     def test_sift_axes_without_enough_boundary_pairs(self):
         img, gt = mirrored_objects_image(1, height=240, width=240, generator=torch.Generator().manual_seed(0))
-        res = boundary_clique_axes(img, min_support=10**5)  # no clique can reach this
+        res = boundary_clique_axes(img, cliques={"min_support": 10**5})  # no clique can reach this
         assert len(res) >= 1 and res.info["sift_axes"] >= 1
         assert bool(match_axes(res.axes[:2], gt, image_size=(240, 240), criterion="challenge").any())
-        assert len(boundary_clique_axes(img, min_support=10**5, sift_candidates=False)) == 0
+        assert len(boundary_clique_axes(img, cliques={"min_support": 10**5}, sift={"enabled": False})) == 0

@@ -1,0 +1,85 @@
+"""Batches and large images for the single-image axis detectors.
+
+An image whose longer side exceeds ``max_side`` is detected on a copy scaled down to that
+side (antialiased) and the result mapped back to the input's pixels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import torch
+
+from torchsym.core.checks import check_image
+from torchsym.features.sift import SIFT_MIN_SIDE
+from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult
+
+__all__ = ["run_batched", "to_input_pixels", "working_copy"]
+
+
+def working_copy(img: torch.Tensor, max_side: int | None) -> torch.Tensor:
+    """``img (B, C, H, W)`` scaled down so its longer side is ``max_side`` (itself when
+    it fits or ``max_side`` is None). The short side of a long strip stays at least
+    ``SIFT_MIN_SIDE`` (32); the bilinear antialiased filter keeps the input's range."""
+    height, width = int(img.shape[-2]), int(img.shape[-1])
+    if max_side is None or max(height, width) <= max_side:
+        return img
+    scale = max_side / max(height, width)
+    size = tuple(min(side, max(SIFT_MIN_SIDE, round(side * scale))) for side in (height, width))
+    src = img if img.dtype in (torch.float32, torch.float64) else img.float()  # antialias: float32/64 only
+    return torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=True)
+
+
+def to_input_pixels(res: ReflectionAxesResult, height: int, width: int) -> ReflectionAxesResult:
+    """``res``, found on a resized copy of an image, in the pixels of the ``height x width`` input.
+
+    Pixel centres map to pixel centres (``x = (x' + 0.5) * width / w' - 0.5``, as
+    ``interpolate(align_corners=False)`` samples); each line is mapped the same way and
+    renormalised. ``info["working_size"]`` records the copy's size.
+    """
+    h, w = res.image_size
+    sx, sy = width / w, height / h
+
+    def points(t: torch.Tensor) -> torch.Tensor:
+        t = t.double().clone()
+        t[..., 0::2] = (t[..., 0::2] + 0.5) * sx - 0.5
+        t[..., 1::2] = (t[..., 1::2] + 0.5) * sy - 0.5
+        return t.float()
+
+    ln = res.lines.double()
+    a, b = ln[:, 0] / sx, ln[:, 1] / sy
+    c = ln[:, 2] + ln[:, 0] * (0.5 / sx - 0.5) + ln[:, 1] * (0.5 / sy - 0.5)
+    lines = torch.stack([a, b, c], 1) / torch.hypot(a, b)[:, None] if ln.shape[0] else ln
+    return dataclasses.replace(
+        res, axes=points(res.axes), lines=lines.float(), pairs=points(res.pairs), image_size=(height, width),
+        info={**res.info, "working_size": (h, w)},
+    )
+
+
+def run_batched(
+    detect_one: Callable[..., ReflectionAxesResult], image: Any, max_side: int | None, **kwargs: Any
+) -> ReflectionAxesResult | ReflectionAxesBatch:
+    """``detect_one(image (1, C, H, W), **kwargs)`` on each image of ``image``.
+
+    Args:
+        detect_one: a single-image detector.
+        image: ``(C, H, W)`` or ``(B, C, H, W)`` (or ``(H, W)``), checked by
+            :func:`~torchsym.core.checks.check_image`.
+        max_side: the longest side an image is detected at, px (None: full size).
+
+    Returns:
+        A :class:`ReflectionAxesResult` for one image, else a :class:`ReflectionAxesBatch`.
+    """
+    img = check_image(image, "image", min_size=16)
+    height, width = int(img.shape[-2]), int(img.shape[-1])
+    work = working_copy(img, max_side)
+
+    def one(b: int) -> ReflectionAxesResult:
+        res = detect_one(work[b : b + 1], **kwargs)
+        return res if work is img else to_input_pixels(res, height, width)
+
+    if img.shape[0] == 1:
+        return one(0)
+    return ReflectionAxesBatch(tuple(one(b) for b in range(img.shape[0])))
