@@ -1,4 +1,6 @@
-"""Reflection geometry in d dimensions, batched and differentiable."""
+"""Reflection geometry in d dimensions, batched and differentiable, and the triangle mesh type."""
+
+from torchsym.geometry.mesh import Mesh
 
 from torchsym.geometry.reflection import (
     angles_to_normal,
@@ -18,6 +20,7 @@ from torchsym.geometry.reflection import (
 )
 
 __all__ = [
+    "Mesh",
     "angles_to_normal",
     "canonical_sign",
     "normal_to_angles",
