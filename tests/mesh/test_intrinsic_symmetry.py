@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from torchsym.core.registry import SOLVERS
-from torchsym.errors import InputShapeError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.mesh import (
     IntrinsicSymmetry,
     IntrinsicSymmetryResult,
@@ -20,16 +20,16 @@ from torchsym.metrics.mesh import correspondence_rate
 
 def _record_settings(monkeypatch) -> dict:
     """Record the settings the module passes on to ``intrinsic_symmetry`` (the dict fills on each call)."""
-    from torchsym.mesh import intrinsic
+    from torchsym.mesh.intrinsic import solver
 
     seen: dict = {}
-    original = intrinsic.intrinsic_symmetry
+    original = solver.intrinsic_symmetry
 
-    def spy(mesh, **kw):
-        seen.update(kw)
-        return original(mesh, **kw)
+    def spy(mesh, settings=None, **kw):
+        seen["settings"] = settings
+        return original(mesh, settings, **kw)
 
-    monkeypatch.setattr(intrinsic, "intrinsic_symmetry", spy)
+    monkeypatch.setattr(solver, "intrinsic_symmetry", spy)
     return seen
 
 
@@ -75,7 +75,7 @@ class TestIntrinsicSymmetry:
 
     def test_no_refine(self, blob):
         mesh, _ = blob
-        out = intrinsic_symmetry(mesh, refine_iters=0)
+        out = intrinsic_symmetry(mesh, refine={"enabled": False})
         assert torch.equal(out.map, out.map_before_refine) and out.refined_functional_map.shape == (0, 0)
 
     def test_rigid_motion(self, solved, rigid_motion):
@@ -104,18 +104,20 @@ class TestIntrinsicSymmetry:
     def test_branches_on_threads_give_the_serial_result(self, blob, monkeypatch):
         # steps 2, 8, 9, 12 and 14 run independent branches on threads (run_branches): the
         # result must be bit for bit the one of the branches run one after another
+        from torchsym.core import parallel
         from torchsym.core.parallel import run_branches
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import realign
 
         mesh, _ = blob
-        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)  # step 14 runs
-        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)  # and its map is kept
+        monkeypatch.setattr(realign, "BELOW", 2.0)  # step 14 runs
+        monkeypatch.setattr(realign, "GAIN", -2.0)  # and its map is kept
         sizes = []
-        monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: sizes.append(len(tasks)) or run_branches(tasks, 2))
+        # (the searches' own two-way brute force, nearest.Nearest.brute, keeps the original)
+        monkeypatch.setattr(parallel, "run_branches", lambda tasks: sizes.append(len(tasks)) or run_branches(tasks, 2))
         threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert sizes[:2] == [2, 2]  # the eigensolver beside the non-spectral work, the pairings beside step 8
         assert len(sizes) >= 4 and max(sizes[2:]) >= 2  # and at least steps 9 and 14
-        monkeypatch.setattr(intrinsic, "run_branches", lambda tasks: run_branches(tasks, 1))
+        monkeypatch.setattr(parallel, "run_branches", lambda tasks: run_branches(tasks, 1))
         serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
         assert any(n.startswith("realigned by ") for n in threaded.notes)
         assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)
@@ -127,19 +129,19 @@ class TestIntrinsicSymmetry:
         # caller's setting back
         from threadpoolctl import threadpool_info, threadpool_limits
 
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps
 
         def blas_threads() -> dict:
             return {d["filepath"]: d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"}
 
         seen: list[dict] = []
-        original = intrinsic._sampled_zoomout
+        original = fmaps.zoomout
 
         def spy(*args, **kwargs):
             seen.append(blas_threads())
             return original(*args, **kwargs)
 
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", spy)
+        monkeypatch.setattr(fmaps, "zoomout", spy)
         mesh, _ = blob
         with threadpool_limits(limits=2, user_api="blas"):
             before = blas_threads()
@@ -151,22 +153,22 @@ class TestIntrinsicSymmetry:
 
     def test_correction_off(self, blob):
         mesh, gt = blob
-        out = intrinsic_symmetry(mesh, correct=False)
+        out = intrinsic_symmetry(mesh, correction={"enabled": False})
         assert torch.equal(out.rotation, torch.eye(13, dtype=out.rotation.dtype))
         assert (out.map.numpy() == gt).mean() > 0.95
 
     def test_refine(self, blob):
         mesh, gt = blob
-        out = intrinsic_symmetry(mesh, refine_iters=3)
+        out = intrinsic_symmetry(mesh, refine={"max_iters": 3})
         assert "refine" in out.timings
         assert (out.map.numpy() == gt).mean() > 0.99
-        with pytest.raises(InputValueError, match="refine_iters: expected an integer >= 0, got -1"):
-            intrinsic_symmetry(mesh, refine_iters=-1)
-        with pytest.raises(InputValueError, match="refine_k: expected an integer >= 1, got 0"):
-            intrinsic_symmetry(mesh, refine_k=0)
-        assert IntrinsicSymmetry(n_eigen=30, refine_iters=0).refine_k == 25  # below n_eigen: raised to it when used
+        with pytest.raises(ConfigError, match="refine.max_iters: expected an int >= 1, got -1"):
+            intrinsic_symmetry(mesh, refine={"max_iters": -1})
+        with pytest.raises(ConfigError, match="refine.n_eigen: expected an int >= 1, got 0"):
+            intrinsic_symmetry(mesh, refine={"n_eigen": 0})
+        assert IntrinsicSymmetry(n_eigen=30, refine={"enabled": False}).settings.refine.n_eigen == 25  # raised to n_eigen when used
         # the thesis's method: no extension
-        thesis = intrinsic_symmetry(mesh, refine_iters=0, sign_hypotheses=0, pairing_hypotheses=False)
+        thesis = intrinsic_symmetry(mesh, refine={"enabled": False}, signs={"n_uncertain": 0}, hypotheses={"hks_pairs": False})
         assert "refine" not in thesis.timings and (thesis.map.numpy() == gt).mean() > 0.99
 
     def test_refined_map_is_an_involution(self, solved):
@@ -178,25 +180,23 @@ class TestIntrinsicSymmetry:
         bumpy = Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
         # (the intrinsic maps: on this mesh their defects are large, and the extrinsic plane
         # would replace them; see TestExtrinsicHypothesis)
-        plain = intrinsic_symmetry(bumpy, refine_involution=False, extrinsic_hypothesis=False)
+        plain = intrinsic_symmetry(bumpy, refine={"involution": False}, extrinsic={"enabled": False})
         plain = plain.refined_functional_map.numpy().astype(np.float64)
         assert np.linalg.norm(plain @ plain - eye) > 0.1
-        fixed = intrinsic_symmetry(bumpy, extrinsic_hypothesis=False).refined_functional_map.numpy().astype(np.float64)
+        fixed = intrinsic_symmetry(bumpy, extrinsic={"enabled": False}).refined_functional_map.numpy().astype(np.float64)
         assert np.allclose(fixed @ fixed, eye, atol=1e-6)
-        with pytest.raises(InputValueError, match="refine_involution"):
-            intrinsic_symmetry(mesh, refine_involution=1)
+        with pytest.raises(ConfigError, match="refine.involution"):
+            intrinsic_symmetry(mesh, refine={"involution": 1})
 
     def test_zoomout_round_uses_the_inverse_map(self, blob):
         """One round from a corrupted map: the average of the forward and inverse fits, projected; closer to the truth."""
         from scipy.spatial import cKDTree
 
         from torchsym.mesh import laplacian_eigen
-        from torchsym.mesh.intrinsic import (
-            _fit_functional,
-            _sampled_zoomout,
-            _Searches,
-            nearest_involution,
-        )
+        from torchsym.mesh.fmaps import fit_functional as _fit_functional
+        from torchsym.mesh.fmaps import nearest_involution
+        from torchsym.mesh.fmaps import zoomout as _sampled_zoomout
+        from torchsym.mesh.nearest import SampledSearch as _Searches
         from torchsym.mesh.operators import mass_matrix
 
         mesh, gt = blob
@@ -226,7 +226,7 @@ class TestIntrinsicSymmetry:
     def test_nearest_involution(self):
         from scipy.stats import ortho_group
 
-        from torchsym.mesh.intrinsic import nearest_involution
+        from torchsym.mesh.fmaps import nearest_involution
 
         q = ortho_group.rvs(6, random_state=0)
         s = q @ np.diag([1.0, 1, -1, 1, -1, -1]) @ q.T  # an orthogonal involution
@@ -264,10 +264,10 @@ class TestIntrinsicSymmetry:
         tiny = Mesh.create([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
         with pytest.raises(InputValueError, match="expected at least 14 vertices in the largest connected component, got 4"):
             intrinsic_symmetry(tiny)
-        with pytest.raises(InputValueError, match="n_eigen: expected an integer >= 3, got 2"):
+        with pytest.raises(ConfigError, match="n_eigen: expected an int >= 3, got 2"):
             intrinsic_symmetry(mesh, n_eigen=2)
-        with pytest.raises(InputValueError, match="mu: expected a non-negative number"):
-            intrinsic_symmetry(mesh, mu=-1.0)
+        with pytest.raises(ConfigError, match="correction.mu: expected a finite number >= 0.0"):
+            intrinsic_symmetry(mesh, correction={"mu": -1.0})
 
 
 class TestIntrinsicSymmetryModule:
@@ -275,26 +275,29 @@ class TestIntrinsicSymmetryModule:
         entry = SOLVERS.get("intrinsic_symmetry")
         assert entry.cls is IntrinsicSymmetry and entry.kind == "mesh"
         assert SOLVERS.default_for("mesh").name == "intrinsic_symmetry"
-        assert entry.defaults()["n_eigen"] == 13 and entry.defaults()["n_times"] == 50
+        assert entry.defaults()["n_eigen"] == 13 and entry.defaults()["features"]["n_times"] == 50
 
     def test_forward_matches_function(self, solved):
         result, mesh, _ = solved
         module = IntrinsicSymmetry(seed=0)
         out = module(mesh)
         assert torch.equal(out.map, result.map)
-        assert "n_eigen=13" in repr(module)
+        assert repr(module) == "IntrinsicSymmetry()"  # only changed settings are listed
+        assert "n_eigen=14" in repr(IntrinsicSymmetry(n_eigen=14))
 
     def test_exception(self):
-        with pytest.raises(InputValueError, match="correct: expected True or False, got 1"):
-            IntrinsicSymmetry(correct=1)  # type: ignore[arg-type]
-        with pytest.raises(InputValueError, match="components: expected 'largest' or 'refuse', got 'all'"):
+        with pytest.raises(ConfigError, match="correction.enabled: expected true or false, got 1"):
+            IntrinsicSymmetry(correction={"enabled": 1})
+        with pytest.raises(ConfigError, match="components: expected one of 'largest', 'refuse', got 'all'"):
             IntrinsicSymmetry(components="all")
-        with pytest.raises(InputValueError, match="orientation_hypothesis: expected True or False, got 'yes'"):
-            IntrinsicSymmetry(orientation_hypothesis="yes")  # type: ignore[arg-type]
-        with pytest.raises(InputValueError, match="select_samples: expected an integer >= 50, got 10"):
-            IntrinsicSymmetry(select_samples=10)
-        with pytest.raises(InputValueError, match="max_distortion: expected a positive number"):
-            IntrinsicSymmetry(max_distortion=0.0)
+        with pytest.raises(ConfigError, match="hypotheses.orientation: expected true or false, got 'yes'"):
+            IntrinsicSymmetry(hypotheses={"orientation": "yes"})
+        with pytest.raises(ConfigError, match="select.n_samples: expected an int >= 50, got 10"):
+            IntrinsicSymmetry(select={"n_samples": 10})
+        with pytest.raises(ConfigError, match="select.max_distortion: expected a finite number > 0.0"):
+            IntrinsicSymmetry(select={"max_distortion": 0.0})
+        with pytest.raises(ConfigError, match="refine_k: unknown setting of IntrinsicSymmetrySettings"):
+            IntrinsicSymmetry(refine_k=25)
 
     def test_config(self):
         from pathlib import Path
@@ -305,22 +308,17 @@ class TestIntrinsicSymmetryModule:
         pipe = build_pipeline(cfg)
         assert isinstance(pipe.steps[0], IntrinsicSymmetry)
 
-    def test_artifacts(self, solved, tmp_path):
-        result, mesh, _ = solved
-        paths = result.write_artifacts(mesh, tmp_path, "blob")
-        assert [p.name for p in paths] == ["blob_symmetry.ply", "blob_map.npy"]
-        assert np.array_equal(np.load(paths[1]), result.map.numpy())
-        assert paths[0].read_bytes().startswith(b"ply")
-        assert '"map"' in result.to_json()
+    def test_to_json(self, solved):
+        assert '"map"' in solved[0].to_json()
 
 
 class TestVertexSubsample:
-    """``search_vertices``: the searches on the vertex sample look among an even subset."""
+    """``select.max_search_vertices``: the searches on the vertex sample look among an even subset."""
 
     def test_even_subset(self):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.intrinsic import _even_subset
+        from torchsym.mesh.intrinsic.sample import even_subset as _even_subset
         from torchsym.mesh.synthetic import icosphere
 
         v = icosphere(4).vertices.double().numpy()  # (2562, 3)
@@ -345,7 +343,7 @@ class TestVertexSubsample:
         # rounding could only pick a near tie, and there is none here)
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import nearest
 
         rng = np.random.default_rng(0)
         points = rng.standard_normal((3000, 16))
@@ -353,9 +351,9 @@ class TestVertexSubsample:
         far = 3.0 * rng.standard_normal((600, 16))
         truth = cKDTree(points)
         used = []
-        original = intrinsic._Nearest.brute
-        monkeypatch.setattr(intrinsic._Nearest, "brute", lambda self, q, *a, **k: used.append(q.shape[0]) or original(self, q, *a, **k))
-        search = intrinsic._Nearest(points)
+        original = nearest.Nearest.brute
+        monkeypatch.setattr(nearest.Nearest, "brute", lambda self, q, *a, **k: used.append(q.shape[0]) or original(self, q, *a, **k))
+        search = nearest.Nearest(points)
         assert np.array_equal(search.query(near), truth.query(near)[1])
         assert used == []  # the kd-tree only (after the probe of every 32nd query)
         assert np.array_equal(search.query(far), truth.query(far)[1])
@@ -366,48 +364,48 @@ class TestVertexSubsample:
         # step 9's sample is drawn from the seed after the eigensolver's and one per pairing
         # with pairs; with the HKS pairing left without pairs, that is the third draw
         from torchsym.core.random import draw_seed
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import hypotheses, solver
 
         mesh, _ = blob
-        pairs_fn, probe_cls, seen = intrinsic.symmetric_pairs, intrinsic.GeodesicProbe, []
+        pairs_fn, probe_cls, seen = hypotheses.symmetric_pairs, solver.GeodesicProbe, []
 
         def no_hks_pairs(*args, **kwargs):
             pairs, cost = pairs_fn(*args, **kwargs)
             assert pairs.shape[0] > 0  # both pairings find pairs here: the guess of two sign draws would be right
             return (pairs[:0], cost) if kwargs["spectral_weight"] == 0.0 else (pairs, cost)
 
-        monkeypatch.setattr(intrinsic, "symmetric_pairs", no_hks_pairs)
-        monkeypatch.setattr(intrinsic, "GeodesicProbe", lambda graph, rows, rng: seen.append(rows) or probe_cls(graph, rows, rng))
-        intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(5), select_samples=200)
+        monkeypatch.setattr(hypotheses, "symmetric_pairs", no_hks_pairs)
+        monkeypatch.setattr(solver, "GeodesicProbe", lambda graph, rows, rng: seen.append(rows) or probe_cls(graph, rows, rng))
+        intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(5), select={"n_samples": 200})
         gen = torch.Generator().manual_seed(5)
         seed = [draw_seed(gen) for _ in range(3)][-1]
         expected = np.sort(np.random.default_rng(seed).choice(mesh.num_vertices, size=200, replace=False))
         assert np.array_equal(seen[0], expected)
 
     def test_recovers_the_symmetry_searching_a_subset(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.nearest import SampledSearch
 
         mesh, gt = blob
         sizes = []
-        original = intrinsic._Searches.__init__
+        original = SampledSearch.__init__
 
         def spy(self, big, targets):
             sizes.append(None if targets is None else targets.size)
             original(self, big, targets)
 
-        monkeypatch.setattr(intrinsic._Searches, "__init__", spy)
+        monkeypatch.setattr(SampledSearch, "__init__", spy)
         # (without the extrinsic plane, which would recover this exact mirror symmetry by itself)
-        out = intrinsic_symmetry(mesh, select_samples=160, search_vertices=320, extrinsic_hypothesis=False)
-        whole = intrinsic_symmetry(mesh, select_samples=160, extrinsic_hypothesis=False)
+        out = intrinsic_symmetry(mesh, select={"n_samples": 160, "max_search_vertices": 320}, extrinsic={"enabled": False})
+        whole = intrinsic_symmetry(mesh, select={"n_samples": 160}, extrinsic={"enabled": False})
         assert sizes[0] is not None and 160 <= sizes[0] <= 320 and sizes[1] is None  # 642 vertices
         assert out.hypothesis == whole.hypothesis == "pairs"
         assert (out.map.numpy() == gt).mean() > 0.99 and (whole.map.numpy() == gt).mean() > 0.99
         # at least twice the sample is searched, with a note
-        raised = intrinsic_symmetry(mesh, select_samples=160, search_vertices=200, extrinsic_hypothesis=False)
-        assert 200 < sizes[2] <= 320 and "search_vertices raised from 200 to 320, twice the vertex sample" in raised.notes
+        raised = intrinsic_symmetry(mesh, select={"n_samples": 160, "max_search_vertices": 200}, extrinsic={"enabled": False})
+        assert 200 < sizes[2] <= 320 and "select.max_search_vertices raised from 200 to 320, twice the vertex sample" in raised.notes
 
     def test_map_before_refine_is_searched_when_first_read(self, blob):
-        from torchsym.mesh.intrinsic import _Deferred
+        from torchsym.mesh.intrinsic.result import Deferred as _Deferred
 
         mesh, _ = blob
         result = intrinsic_symmetry(mesh)
@@ -423,7 +421,7 @@ class TestVertexSubsample:
         for make in (lambda r: pickle.loads(pickle.dumps(r)), copy.deepcopy):  # before and after the first read
             fresh = intrinsic_symmetry(mesh)
             assert torch.equal(make(fresh).map_before_refine, first) and torch.equal(make(result).map_before_refine, first)
-        unrefined = intrinsic_symmetry(mesh, refine_iters=0)  # there it is the result, searched in the call
+        unrefined = intrinsic_symmetry(mesh, refine={"enabled": False})  # there it is the result, searched in the call
         assert isinstance(object.__getattribute__(unrefined, "map_before_refine"), torch.Tensor)
 
     def test_map_before_refine_is_a_near_nearest_map(self, solved):
@@ -445,10 +443,10 @@ class TestVertexSubsample:
 
     def test_bad_setting(self, blob):
         mesh, _ = blob
-        with pytest.raises(InputValueError, match="search_vertices: expected an integer >= 50, got 10"):
-            intrinsic_symmetry(mesh, search_vertices=10)
-        with pytest.raises(InputValueError, match="search_vertices: expected an integer >= 50, got 10"):
-            IntrinsicSymmetry(search_vertices=10)
+        with pytest.raises(ConfigError, match="select.max_search_vertices: expected an int >= 50, got 10"):
+            intrinsic_symmetry(mesh, select={"max_search_vertices": 10})
+        with pytest.raises(ConfigError, match="select.max_search_vertices: expected an int >= 50, got 10"):
+            IntrinsicSymmetry(select={"max_search_vertices": 10})
 
 
 def test_real_mesh(shared_data):
@@ -464,7 +462,7 @@ def test_no_pairs_gives_identity(shared_data):
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")  # 122 components, largest without pairs
-    out = intrinsic_symmetry(mesh, orientation_hypothesis=False)
+    out = intrinsic_symmetry(mesh, hypotheses={"orientation": False})
     kept = torch.nonzero(out.map >= 0).ravel()
     assert out.dropped_vertices > 0 and (out.map < 0).sum() == out.dropped_vertices
     assert out.pairs.shape[0] == 0
@@ -521,7 +519,7 @@ class TestSignHypotheses:
             assert map_consistency(tree, evecs, wrong, rows) > 2.0 * true_q
 
     def test_a_flipped_low_confidence_sign_is_repaired(self, spectral):
-        from torchsym.mesh.intrinsic import _sign_hypotheses
+        from torchsym.mesh.intrinsic.hypotheses import sign_hypotheses as _sign_hypotheses
 
         evecs, signs = spectral
         confidence = np.ones(13)
@@ -539,12 +537,12 @@ class TestSignHypotheses:
 
     def test_thesis_rule_and_bad_setting(self, blob):
         mesh, gt = blob
-        thesis = intrinsic_symmetry(mesh, sign_hypotheses=0)
+        thesis = intrinsic_symmetry(mesh, signs={"n_uncertain": 0})
         assert correspondence_rate(mesh, thesis.map, ground_truth=gt).rate == 1.0
-        with pytest.raises(InputValueError, match="sign_hypotheses"):
-            intrinsic_symmetry(mesh, sign_hypotheses=-1)
-        with pytest.raises(InputValueError, match="sign_hypotheses"):
-            IntrinsicSymmetry(sign_hypotheses=1.5)
+        with pytest.raises(ConfigError, match="signs.n_uncertain"):
+            intrinsic_symmetry(mesh, signs={"n_uncertain": -1})
+        with pytest.raises(ConfigError, match="signs.n_uncertain"):
+            IntrinsicSymmetry(signs={"n_uncertain": 1.5})
 
 
 class TestPairingHypotheses:
@@ -564,12 +562,12 @@ class TestPairingHypotheses:
 
     def test_setting(self, blob):
         mesh, gt = blob
-        one = intrinsic_symmetry(mesh, pairing_hypotheses=False)
+        one = intrinsic_symmetry(mesh, hypotheses={"hks_pairs": False})
         assert correspondence_rate(mesh, one.map, ground_truth=gt).rate == 1.0
-        with pytest.raises(InputValueError, match="pairing_hypotheses: expected True or False"):
-            intrinsic_symmetry(mesh, pairing_hypotheses=1)
-        with pytest.raises(InputValueError, match="pairing_hypotheses: expected True or False"):
-            IntrinsicSymmetry(pairing_hypotheses="yes")
+        with pytest.raises(ConfigError, match="hypotheses.hks_pairs: expected true or false"):
+            intrinsic_symmetry(mesh, hypotheses={"hks_pairs": 1})
+        with pytest.raises(ConfigError, match="hypotheses.hks_pairs: expected true or false"):
+            IntrinsicSymmetry(hypotheses={"hks_pairs": "yes"})
 
 
 class TestExtrinsicHypothesis:
@@ -588,11 +586,11 @@ class TestExtrinsicHypothesis:
         assert out.hypothesis == "extrinsic" and "extrinsic" in out.timings
         assert any("extrinsic reflection plane" in n for n in out.notes)
         assert correspondence_rate(holed, out.map, ground_truth=truth).rate > 0.95
-        off = intrinsic_symmetry(holed, fill_holes=False, extrinsic_hypothesis=False)
+        off = intrinsic_symmetry(holed, fill_holes=False, extrinsic={"enabled": False})
         assert off.hypothesis != "extrinsic" and "extrinsic" not in off.timings
         assert correspondence_rate(holed, off.map, ground_truth=truth).rate < 0.5
         # a plane whose symmetry score is below the limit is not used
-        strict = intrinsic_symmetry(holed, fill_holes=False, extrinsic_min_score=1.0)
+        strict = intrinsic_symmetry(holed, fill_holes=False, extrinsic={"min_score": 1.0})
         assert strict.hypothesis != "extrinsic"
 
     @staticmethod
@@ -601,7 +599,7 @@ class TestExtrinsicHypothesis:
         return Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
 
     def test_tried_when_the_chosen_map_has_a_large_defect(self, solved, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import select
 
         # a finite but large functional defect also counts as weak
         _, mesh, _ = solved
@@ -610,23 +608,23 @@ class TestExtrinsicHypothesis:
         assert out.hypothesis == "extrinsic"
         weak = next(n for n in out.notes if "extrinsic reflection plane" in n)
         assert "inf" not in weak  # the intrinsic map had finite defects
-        monkeypatch.setattr(intrinsic, "_WEAK_DEFECT", 100.0)
+        monkeypatch.setattr(select, "WEAK_DEFECT", 100.0)
         assert intrinsic_symmetry(bumpy).hypothesis != "extrinsic"
 
     def test_low_scoring_plane_used_when_its_map_clearly_wins(self, solved, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import hypotheses, select
 
         # the plane's refined map beats the thesis's on every test (defects about 0.14x and
         # 0.25x, distortion about 0.39x): used even when the plane scores far under the limit,
         # with a note that says why; not used when "clearly" asks for 0.3x
         _, mesh, _ = solved
         bumpy = self._bumpy(mesh)
-        original = intrinsic._extrinsic_candidate
-        monkeypatch.setattr(intrinsic, "_extrinsic_candidate", lambda *a: (original(*a)[0], 0.1))
+        original = hypotheses.extrinsic_candidate
+        monkeypatch.setattr(hypotheses, "extrinsic_candidate", lambda *a: (original(*a)[0], 0.1))
         out = intrinsic_symmetry(bumpy)
         assert out.hypothesis == "extrinsic"
         assert any("symmetry score 0.10, under 0.75, but each test of its refined map" in n for n in out.notes)
-        monkeypatch.setattr(intrinsic, "_EXTRINSIC_CLEARLY", 0.3)
+        monkeypatch.setattr(select, "EXTRINSIC_CLEARLY", 0.3)
         out = intrinsic_symmetry(bumpy)
         assert out.hypothesis != "extrinsic" and any("did not replace it" in n for n in out.notes)
 
@@ -635,22 +633,22 @@ class TestExtrinsicHypothesis:
 
         mesh, gt = blob
         holed, _ = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
-        out = intrinsic_symmetry(holed, fill_holes=False, max_distortion_open=1e-3)
+        out = intrinsic_symmetry(holed, fill_holes=False, select={"max_distortion_open": 1e-3})
         assert out.hypothesis != "extrinsic"
         assert any("did not replace it" in n for n in out.notes)
 
     def test_score_limit_scaled_by_the_patched_area(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import hypotheses, select
         from torchsym.mesh.synthetic import punch_holes
 
         # 10 % of the area punched out and covered again: a plane scoring 0.72 (under 0.75,
         # over 0.75 x (1 - patch share)) is accepted there, one scoring 0.6 is not
         mesh, gt = blob
         holed, truth = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
-        original = intrinsic._extrinsic_candidate
-        monkeypatch.setattr(intrinsic, "_WEAK_DEFECT", -1.0)  # every intrinsic map counts as weak
+        original = hypotheses.extrinsic_candidate
+        monkeypatch.setattr(select, "WEAK_DEFECT", -1.0)  # every intrinsic map counts as weak
         for fake, used in ((0.72, True), (0.6, False)):
-            monkeypatch.setattr(intrinsic, "_extrinsic_candidate", lambda *a, fake=fake: (original(*a)[0], fake))
+            monkeypatch.setattr(hypotheses, "extrinsic_candidate", lambda *a, fake=fake: (original(*a)[0], fake))
             out = intrinsic_symmetry(holed)
             assert out.holes_closed >= 1 and (out.hypothesis == "extrinsic") == used
 
@@ -672,12 +670,14 @@ class TestExtrinsicHypothesis:
         for seed in (-1, 2**64 - 1):
             out = intrinsic_symmetry(holed, fill_holes=False, generator=torch.Generator().manual_seed(seed))
             assert out.hypothesis == "extrinsic"
-        assert IntrinsicSymmetry(fill_holes=False, seed=-1)(holed).hypothesis == "extrinsic"
+        assert IntrinsicSymmetry(fill_holes=False)(holed, torch.Generator().manual_seed(-1)).hypothesis == "extrinsic"
+        with pytest.raises(ConfigError, match="seed: expected an int >= 0, got -1"):
+            IntrinsicSymmetry(seed=-1)
 
     def test_candidate_map_and_score(self, blob):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.intrinsic import _extrinsic_candidate
+        from torchsym.mesh.intrinsic.hypotheses import extrinsic_candidate as _extrinsic_candidate
 
         mesh, gt = blob
         v = mesh.vertices.numpy()
@@ -690,12 +690,12 @@ class TestExtrinsicHypothesis:
 
     def test_bad_settings(self, blob):
         mesh, _ = blob
-        with pytest.raises(InputValueError, match="extrinsic_min_score"):
-            intrinsic_symmetry(mesh, extrinsic_min_score=1.5)
-        with pytest.raises(InputValueError, match="extrinsic_hypothesis"):
-            intrinsic_symmetry(mesh, extrinsic_hypothesis="yes")  # type: ignore[arg-type]
-        with pytest.raises(InputValueError, match="extrinsic_samples"):
-            intrinsic_symmetry(mesh, extrinsic_samples=3)
+        with pytest.raises(ConfigError, match="extrinsic.min_score"):
+            intrinsic_symmetry(mesh, extrinsic={"min_score": 1.5})
+        with pytest.raises(ConfigError, match="extrinsic.enabled"):
+            intrinsic_symmetry(mesh, extrinsic={"enabled": "yes"})
+        with pytest.raises(ConfigError, match="extrinsic.max_points"):
+            intrinsic_symmetry(mesh, extrinsic={"max_points": 3})
 
 
 @pytest.fixture(scope="module")
@@ -718,7 +718,8 @@ class TestOrientationCheck:
     """Step 12: a final map that keeps the surface's orientation is refined again with the orientation penalty."""
 
     def test_oriented_fit_is_the_exact_minimiser(self, spectral25):
-        from torchsym.mesh.intrinsic import _oriented_fits, _zoomout_fit
+        from torchsym.mesh.fmaps import zoomout_fit as _zoomout_fit
+        from torchsym.mesh.intrinsic.reorient import oriented_fits as _oriented_fits
 
         big, area, ops, rows, gt = spectral25
         kk, weight = 16, 30.0
@@ -746,7 +747,9 @@ class TestOrientationCheck:
             assert abs(up - down) < 1e-6 * (up + down - 2 * base)
 
     def test_penalty_keeps_the_mirror_and_dislodges_the_identity(self, spectral25):
-        from torchsym.mesh.intrinsic import _oriented_fits, _sampled_zoomout, _Searches
+        from torchsym.mesh.fmaps import zoomout as _sampled_zoomout
+        from torchsym.mesh.intrinsic.reorient import oriented_fits as _oriented_fits
+        from torchsym.mesh.nearest import SampledSearch as _Searches
 
         big, area, ops, rows, gt = spectral25
         ks = np.array([16, 19, 22, 25])
@@ -782,9 +785,9 @@ class TestOrientationCheck:
     @staticmethod
     def _turn_refiner(intrinsic, maps, oriented_too: bool = False):
         """A stand-in for ZoomOut whose plain refinement (and with ``oriented_too`` every one) ends on the half turn."""
-        from torchsym.mesh.intrinsic import _fit_functional
+        from torchsym.mesh.fmaps import fit_functional as _fit_functional
 
-        original = intrinsic._sampled_zoomout
+        original = intrinsic.zoomout
 
         def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             # an isometric involution that keeps the orientation
@@ -797,14 +800,14 @@ class TestOrientationCheck:
         return refine_to_the_turn
 
     def test_a_map_that_keeps_orientation_is_replaced(self, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps as intrinsic
         from torchsym.mesh.orientation import orientation_reversal
 
         mesh, maps = self._two_mirror_blob()
         v, f = mesh.vertices.numpy(), mesh.faces.numpy()
         assert np.mean(orientation_reversal(v, f, maps["turn"]) < 0) == 0.0
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps))
-        off = intrinsic_symmetry(mesh, refine_orientation=0.0)
+        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps))
+        off = intrinsic_symmetry(mesh, refine={"orientation_weight": 0.0})
         assert np.mean(off.map.numpy() == maps["turn"]) > 0.95 and "orientation_check" not in off.timings
         out = intrinsic_symmetry(mesh)
         got = out.map.numpy()
@@ -818,13 +821,13 @@ class TestOrientationCheck:
         assert not any("orientation" in n and "penalty" in n for n in result.notes)
 
     def test_bad_weight(self, blob):
-        with pytest.raises(InputValueError, match="refine_orientation"):
-            intrinsic_symmetry(blob[0], refine_orientation=-1.0)
+        with pytest.raises(ConfigError, match="refine.orientation_weight"):
+            intrinsic_symmetry(blob[0], refine={"orientation_weight": -1.0})
 
     @staticmethod
     def _drifting_refiner(intrinsic):
         """A stand-in for ZoomOut whose plain refinement drifts to the identity on every hypothesis, so none passes step 9."""
-        original = intrinsic._sampled_zoomout
+        original = intrinsic.zoomout
 
         def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             if oriented is not None:
@@ -834,11 +837,11 @@ class TestOrientationCheck:
         return plain_drifts_home
 
     def test_rescues_when_no_hypothesis_passes(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps as intrinsic
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._drifting_refiner(intrinsic))
-        off = intrinsic_symmetry(mesh, refine_orientation=0.0)
+        monkeypatch.setattr(intrinsic, "zoomout", self._drifting_refiner(intrinsic))
+        off = intrinsic_symmetry(mesh, refine={"orientation_weight": 0.0})
         assert any("returned unrefined and is unreliable" in n for n in off.notes)
         out = intrinsic_symmetry(mesh)
         assert not any("unreliable" in n for n in out.notes)
@@ -848,29 +851,31 @@ class TestOrientationCheck:
 
     def test_rescue_allows_more_distortion(self, blob, monkeypatch):
         """With no passing hypothesis the rescue takes maps up to 1.5x the distortion limit, and says so."""
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh.intrinsic import GeodesicProbe
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._drifting_refiner(intrinsic))
-        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", lambda self, image: 0.15)
-        out = intrinsic_symmetry(mesh, max_distortion=0.12)  # 0.15 < 1.5 x 0.12
+        monkeypatch.setattr(intrinsic, "zoomout", self._drifting_refiner(intrinsic))
+        monkeypatch.setattr(GeodesicProbe, "distortion", lambda self, image: 0.15)
+        out = intrinsic_symmetry(mesh, select={"max_distortion": 0.12})  # 0.15 < 1.5 x 0.12
         assert any("distorts geodesics by 0.150, above the limit 0.12: the map is less reliable" in n for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=torch.from_numpy(gt)).rate > 0.95
-        tight = intrinsic_symmetry(mesh, max_distortion=0.09)  # 0.15 > 1.5 x 0.09
+        tight = intrinsic_symmetry(mesh, select={"max_distortion": 0.09})  # 0.15 > 1.5 x 0.09
         assert any("returned unrefined and is unreliable" in n for n in tight.notes)
         assert not any("refined with the orientation penalty" in n for n in tight.notes)
 
     def test_no_reoriented_map_found_keeps_the_map(self, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps as intrinsic
 
         mesh, maps = self._two_mirror_blob()
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps, oriented_too=True))
+        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps, oriented_too=True))
         out = intrinsic_symmetry(mesh)
         assert np.mean(out.map.numpy() == maps["turn"]) > 0.95
         assert any("found no map that reverses it at 60%, the map is unreliable" in n for n in out.notes)
 
     def test_skipped_on_inconsistent_winding(self, blob, monkeypatch):
-        from torchsym.mesh import consistently_wound, intrinsic
+        from torchsym.mesh import consistently_wound
+        from torchsym.mesh import fmaps as intrinsic
 
         mesh, maps = self._two_mirror_blob()
         f = mesh.faces.numpy().copy()
@@ -884,65 +889,65 @@ class TestOrientationCheck:
         assert _pair_keys(np.array([[0, 3_000_000_000]])) is None  # the slow exact path
         huge = mesh.faces.numpy() + 3_000_000_000  # indices only: the winding test needs no vertices
         assert consistently_wound(huge) and not consistently_wound(f + 3_000_000_000)
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", self._turn_refiner(intrinsic, maps))
+        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps))
         out = intrinsic_symmetry(Mesh(mesh.vertices, torch.from_numpy(f)))
         assert "orientation_check" not in out.timings
         assert any("not consistently wound" in n for n in out.notes)
 
     def test_skipped_above_refine_k_50(self, blob):
-        out = intrinsic_symmetry(blob[0], refine_k=51)
+        out = intrinsic_symmetry(blob[0], refine={"n_eigen": 51})
         assert "orientation_check" not in out.timings
-        assert any("refine_k > 50" in n for n in out.notes)
+        assert any("refine.n_eigen > 50" in n for n in out.notes)
 
     def test_module_forwards_and_checks_the_weight(self, blob, monkeypatch):
         seen = _record_settings(monkeypatch)
-        IntrinsicSymmetry(refine_orientation=12.5)(blob[0])
-        assert seen["refine_orientation"] == 12.5
-        with pytest.raises(InputValueError, match="refine_orientation"):
-            IntrinsicSymmetry(refine_orientation=-1.0)
+        IntrinsicSymmetry(refine={"orientation_weight": 12.5})(blob[0])
+        assert seen["settings"].refine.orientation_weight == 12.5
+        with pytest.raises(ConfigError, match="refine.orientation_weight"):
+            IntrinsicSymmetry(refine={"orientation_weight": -1.0})
 
 
 class TestPolish:
-    """Step 13: ZoomOut on into ``polish_k`` eigenfunctions, kept unless the orientation reversal falls."""
+    """Step 13: ZoomOut on into ``polish.n_eigen`` eigenfunctions, kept unless the orientation reversal falls."""
 
     def test_default_polishes_to_40(self, solved):
         result, mesh, gt = solved
         assert result.refined_functional_map.shape == (40, 40) and "polish" in result.timings
         assert correspondence_rate(mesh, result.map, ground_truth=gt).rate == 1.0
-        assert not any("polish_k" in n for n in result.notes)
+        assert not any("polish.n_eigen" in n for n in result.notes)
 
-    @pytest.mark.parametrize("settings", [{"polish_iters": 0}, {"polish_k": 25}, {"refine_iters": 0}])
+    @pytest.mark.parametrize("settings", [{"polish": {"enabled": False}}, {"polish": {"n_eigen": 25}}, {"refine": {"enabled": False}}])
     def test_off(self, blob, settings):
         mesh, gt = blob
         out = intrinsic_symmetry(mesh, **settings)
         assert "polish" not in out.timings
-        assert out.refined_functional_map.shape == ((0, 0) if "refine_iters" in settings else (25, 25))
-        if "refine_iters" not in settings:
+        assert out.refined_functional_map.shape == ((0, 0) if "refine" in settings else (25, 25))
+        if "refine" not in settings:
             assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
     def test_not_kept_when_the_orientation_reversal_falls(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import polish
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # no share can rise by 2
+        monkeypatch.setattr(polish, "ORIENTATION_DROP", -2.0)  # no share can rise by 2
         out = intrinsic_symmetry(mesh)
         assert out.refined_functional_map.shape == (25, 25) and "polish" in out.timings
-        assert any(n.startswith("ZoomOut to polish_k = 40 eigenfunctions not kept (orientation reversed at") for n in out.notes)
+        assert any(n.startswith("ZoomOut to polish.n_eigen = 40 eigenfunctions not kept (orientation reversed at") for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
     def test_a_polish_that_drifts_home_is_not_kept(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh import fmaps
 
         mesh, _ = blob
-        original = intrinsic._sampled_zoomout
+        original = fmaps.zoomout
 
         def polish_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             if int(ks[0]) <= 25:  # steps 9 and 12
                 return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             return rows.copy(), np.eye(int(ks[-1]))
 
-        monkeypatch.setattr(intrinsic, "_sampled_zoomout", polish_drifts_home)
-        kept = intrinsic_symmetry(mesh, polish_iters=1)
+        monkeypatch.setattr(fmaps, "zoomout", polish_drifts_home)
+        kept = intrinsic_symmetry(mesh, polish={"max_iters": 1})
         assert kept.refined_functional_map.shape == (25, 25)
         assert any("not kept" in n for n in kept.notes)
 
@@ -951,7 +956,7 @@ class TestPolish:
         """Without a consistent winding the geodesic distortion decides: the probe here reports
         a distortion that rises (or falls) with every call, so the polished map, measured
         after the map it came from, is rejected (or kept) whatever the orientation says."""
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import GeodesicProbe, polish, spectrum
 
         mesh, gt = blob
         calls = []
@@ -960,32 +965,32 @@ class TestPolish:
             calls.append(1)
             return (1e-4 * len(calls)) if rising else (0.1 - 1e-4 * len(calls))
 
-        monkeypatch.setattr(intrinsic, "consistently_wound", lambda faces: False)
-        monkeypatch.setattr(intrinsic.GeodesicProbe, "distortion", fake)
-        monkeypatch.setattr(intrinsic, "_POLISH_ORIENTATION_DROP", -2.0)  # would reject every polish if used
+        monkeypatch.setattr(spectrum, "consistently_wound", lambda faces: False)
+        monkeypatch.setattr(GeodesicProbe, "distortion", fake)
+        monkeypatch.setattr(polish, "ORIENTATION_DROP", -2.0)  # would reject every polish if used
         out = intrinsic_symmetry(mesh)
         assert any("not consistently wound" in n for n in out.notes)
-        rejected = any(n.startswith("ZoomOut to polish_k = 40 eigenfunctions not kept (geodesic distortion") for n in out.notes)
+        rejected = any(n.startswith("ZoomOut to polish.n_eigen = 40 eigenfunctions not kept (geodesic distortion") for n in out.notes)
         assert rejected == rising
         assert out.refined_functional_map.shape == ((25, 25) if rising else (40, 40))
 
-    def test_polish_k_lowered_on_a_small_mesh(self, blob):
+    def test_polish_n_eigen_lowered_on_a_small_mesh(self, blob):
         mesh, gt = blob
         n = mesh.num_vertices
-        out = intrinsic_symmetry(mesh, polish_k=5000, polish_iters=1)
-        assert any(f"polish_k lowered from 5000 to {n - 1}" in note for note in out.notes)
+        out = intrinsic_symmetry(mesh, polish={"n_eigen": 5000, "max_iters": 1})
+        assert any(f"polish.n_eigen lowered from 5000 to {n - 1}" in note for note in out.notes)
         assert out.refined_functional_map.shape in ((n - 1, n - 1), (25, 25))
 
     def test_bad_settings_and_the_module(self, blob, monkeypatch):
-        with pytest.raises(InputValueError, match="polish_iters"):
-            intrinsic_symmetry(blob[0], polish_iters=-1)
-        with pytest.raises(InputValueError, match="polish_k"):
-            intrinsic_symmetry(blob[0], polish_k=0)
-        with pytest.raises(InputValueError, match="polish_k"):
-            IntrinsicSymmetry(polish_k=1.5)
+        with pytest.raises(ConfigError, match="polish.max_iters"):
+            intrinsic_symmetry(blob[0], polish={"max_iters": 0})
+        with pytest.raises(ConfigError, match="polish.n_eigen"):
+            intrinsic_symmetry(blob[0], polish={"n_eigen": 0})
+        with pytest.raises(ConfigError, match="polish.n_eigen"):
+            IntrinsicSymmetry(polish={"n_eigen": 1.5})
         seen = _record_settings(monkeypatch)
-        IntrinsicSymmetry(polish_k=30, polish_iters=2)(blob[0])
-        assert seen["polish_k"] == 30 and seen["polish_iters"] == 2
+        IntrinsicSymmetry(polish={"n_eigen": 30, "max_iters": 2})(blob[0])
+        assert seen["settings"].polish.n_eigen == 30 and seen["settings"].polish.max_iters == 2
 
 
 class TestRealign:
@@ -994,7 +999,7 @@ class TestRealign:
     def test_nearest_profiles_is_exact(self):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.intrinsic import _nearest_profiles
+        from torchsym.mesh.nearest import nearest_profiles as _nearest_profiles
 
         rng = np.random.default_rng(0)
         data = rng.standard_normal((700, 64))
@@ -1009,7 +1014,7 @@ class TestRealign:
         """The true map with a cap of the blob sent to itself (the failure it is for): the
         realignment by geodesic distances to anchors restores the cap's mirror."""
         from torchsym.mesh.geodesic import geodesic_distances
-        from torchsym.mesh.intrinsic import _anchor_realignment
+        from torchsym.mesh.intrinsic.realign import anchor_realignment as _anchor_realignment
         from torchsym.mesh.operators import edge_graph
 
         mesh, gt = blob
@@ -1044,57 +1049,57 @@ class TestRealign:
         assert correspondence_rate(mesh, result.map, ground_truth=gt).rate == 1.0
 
     def test_kept_when_forced_and_still_exact(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import realign
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)  # run whatever the share
-        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)  # and keep any map
+        monkeypatch.setattr(realign, "BELOW", 2.0)  # run whatever the share
+        monkeypatch.setattr(realign, "GAIN", -2.0)  # and keep any map
         out = intrinsic_symmetry(mesh)
         assert any(n.startswith("realigned by ") and "distances to 64 anchors" in n for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
     def test_not_kept_without_a_clear_rise(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import realign
 
         mesh, _ = blob
-        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)
-        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", 2.0)  # no share can rise by 2
+        monkeypatch.setattr(realign, "BELOW", 2.0)
+        monkeypatch.setattr(realign, "GAIN", 2.0)  # no share can rise by 2
         calls = []
-        original = intrinsic._anchor_realignment
-        monkeypatch.setattr(intrinsic, "_anchor_realignment", lambda *a, **k: calls.append(1) or original(*a, **k))
+        original = realign.anchor_realignment
+        monkeypatch.setattr(realign, "anchor_realignment", lambda *a, **k: calls.append(1) or original(*a, **k))
         out = intrinsic_symmetry(mesh)
         assert len(calls) == 2  # geodesic and biharmonic distances were both tried
         assert not any(n.startswith("realigned") for n in out.notes)
 
-    @pytest.mark.parametrize("settings", [{"realign_anchors": 0}, {"realign_iters": 0}, {"refine_iters": 0}])
+    @pytest.mark.parametrize("settings", [{"realign": {"enabled": False}}, {"refine": {"enabled": False}}])
     def test_off(self, blob, settings):
         assert "realign" not in intrinsic_symmetry(blob[0], **settings).timings
 
     def test_runs_without_polish_in_refine_k(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import realign
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "_REALIGN_BELOW", 2.0)
-        monkeypatch.setattr(intrinsic, "_REALIGN_GAIN", -2.0)
-        out = intrinsic_symmetry(mesh, polish_iters=0)
+        monkeypatch.setattr(realign, "BELOW", 2.0)
+        monkeypatch.setattr(realign, "GAIN", -2.0)
+        out = intrinsic_symmetry(mesh, polish={"enabled": False})
         assert "realign" in out.timings and "polish" not in out.timings
         assert any(n.startswith("realigned by ") for n in out.notes)
         assert out.refined_functional_map.shape == (25, 25)  # the realigned map's C in refine_k
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
     def test_skipped_with_a_note_without_a_winding(self, blob, monkeypatch):
-        from torchsym.mesh import intrinsic
+        from torchsym.mesh.intrinsic import spectrum
 
-        monkeypatch.setattr(intrinsic, "consistently_wound", lambda faces: False)
+        monkeypatch.setattr(spectrum, "consistently_wound", lambda faces: False)
         out = intrinsic_symmetry(blob[0])
         assert "realign" not in out.timings
         assert any(n.startswith("realignment (step 14) skipped") for n in out.notes)
 
     def test_bad_settings_and_the_module(self, blob, monkeypatch):
-        with pytest.raises(InputValueError, match="realign_anchors"):
-            intrinsic_symmetry(blob[0], realign_anchors=-1)
-        with pytest.raises(InputValueError, match="realign_iters"):
-            IntrinsicSymmetry(realign_iters=1.5)
+        with pytest.raises(ConfigError, match="realign.n_anchors"):
+            intrinsic_symmetry(blob[0], realign={"n_anchors": 0})
+        with pytest.raises(ConfigError, match="realign.max_iters"):
+            IntrinsicSymmetry(realign={"max_iters": 1.5})
         seen = _record_settings(monkeypatch)
-        IntrinsicSymmetry(realign_anchors=32, realign_iters=2)(blob[0])
-        assert seen["realign_anchors"] == 32 and seen["realign_iters"] == 2
+        IntrinsicSymmetry(realign={"n_anchors": 32, "max_iters": 2})(blob[0])
+        assert seen["settings"].realign.n_anchors == 32 and seen["settings"].realign.max_iters == 2

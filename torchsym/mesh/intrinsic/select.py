@@ -18,7 +18,7 @@ from torchsym.mesh.intrinsic.hypotheses import Candidate, first_image
 from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
 from torchsym.mesh.intrinsic.workspace import Workspace
 
-__all__ = ["EXTRINSIC_CLEARLY", "WEAK_DEFECT", "choose", "rank_choice", "refine_score", "screen", "try_extrinsic"]
+__all__ = ["EXTRINSIC_CLEARLY", "WEAK_DEFECT", "choose", "is_weak", "rank_choice", "refine_score", "screen", "try_extrinsic"]
 
 logger = logging.getLogger(__name__)
 
@@ -45,6 +45,11 @@ def rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
     best = int(np.argmin(ranks))
     distortion = table[:, -1]
     return best if best == 0 or distortion[best] < min(max_distortion, distortion[0]) else 0
+
+
+def is_weak(row: np.ndarray) -> bool:
+    """Whether the chosen hypothesis's tests ``(width,)`` fail or its defect in ``k`` exceeds :data:`WEAK_DEFECT` (step 10 runs)."""
+    return not np.isfinite(row).all() or row[0] > WEAK_DEFECT
 
 
 def screen(ws: Workspace, seen: list[np.ndarray], cand: Candidate, image: np.ndarray | None = None) -> np.ndarray | None:

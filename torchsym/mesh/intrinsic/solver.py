@@ -33,7 +33,7 @@ from torchsym.mesh.intrinsic.refine import COARSE_EPS, finish_map, refined_map, 
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
-from torchsym.mesh.intrinsic.select import WEAK_DEFECT, choose, try_extrinsic
+from torchsym.mesh.intrinsic.select import choose, is_weak, try_extrinsic
 from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
 from torchsym.mesh.intrinsic.workspace import Plan, Surface, Workspace, plan_bases, prepare_surface, sample_notes
@@ -120,7 +120,7 @@ def intrinsic_symmetry(
     table, best = choose(ws, candidates, images, seen)  # step 9
     timings["select"] += time.perf_counter() - tic
     extrinsic_note = None
-    if settings.extrinsic.enabled and (not np.isfinite(table[best]).all() or table[best, 0] > WEAK_DEFECT):
+    if settings.extrinsic.enabled and is_weak(table[best]):
         tic = time.perf_counter()
         table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
         timings["extrinsic"] = time.perf_counter() - tic
