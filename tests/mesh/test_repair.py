@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import ConfigError, InputValueError
+from torchsym.errors import ConfigError
 from torchsym.mesh.intrinsic import intrinsic_symmetry
 from torchsym.mesh.operators import edge_face_counts
 from torchsym.mesh.repair import HoleFilling, _loop_spans, boundary_loops, close_holes
