@@ -14,10 +14,10 @@ class TestZoomout:
         from scipy.spatial import cKDTree
 
         from torchsym.mesh import laplacian_eigen
-        from torchsym.mesh.fmaps import fit_functional as _fit_functional
+        from torchsym.mesh.fmaps import fit_functional
         from torchsym.mesh.fmaps import nearest_involution
-        from torchsym.mesh.fmaps import zoomout as _sampled_zoomout
-        from torchsym.mesh.nearest import SampledSearch as _Searches
+        from torchsym.mesh.fmaps import zoomout
+        from torchsym.mesh.nearest import SampledSearch
         from torchsym.mesh.operators import mass_matrix
 
         mesh, gt = blob
@@ -29,19 +29,19 @@ class TestZoomout:
         image = gt[rows].copy()
         bad = rng.random(rows.size) < 0.4
         image[bad] = rng.integers(0, v.shape[0], int(bad.sum()))  # 40 % of the map wrong
-        trees = _Searches(phi, None)
-        out, c = _sampled_zoomout(phi, area, rows, image, np.array([13]), trees, involution=True)
-        fwd = _fit_functional(phi[rows], phi[image], area[rows])
+        trees = SampledSearch(phi, None)
+        out, c = zoomout(phi, area, rows, image, np.array([13]), trees, involution=True)
+        fwd = fit_functional(phi[rows], phi[image], area[rows])
         pre = cKDTree(phi @ fwd).query(phi[rows], k=1)[1]
-        want = nearest_involution(0.5 * (fwd + _fit_functional(phi[rows], phi[pre], area[rows])))
+        want = nearest_involution(0.5 * (fwd + fit_functional(phi[rows], phi[pre], area[rows])))
         assert np.allclose(c, want)
-        truth = _fit_functional(phi[rows], phi[gt[rows]], area[rows])
+        truth = fit_functional(phi[rows], phi[gt[rows]], area[rows])
         forward_only = nearest_involution(fwd)
         assert np.linalg.norm(c - truth) < np.linalg.norm(forward_only - truth)
         assert (out == gt[rows]).mean() >= (cKDTree(phi).query(phi[rows] @ forward_only, k=1)[1] == gt[rows]).mean()
         # among an even subset that holds the sample: the images are subset vertices
         subset = np.union1d(rows, np.arange(0, v.shape[0], 3))
-        sub_out, _ = _sampled_zoomout(phi, area, rows, image, np.array([13]), _Searches(phi, subset), involution=True)
+        sub_out, _ = zoomout(phi, area, rows, image, np.array([13]), SampledSearch(phi, subset), involution=True)
         assert np.isin(sub_out, subset).all() and (sub_out == gt[rows]).mean() >= 0.5 * (out == gt[rows]).mean()
 
 

@@ -34,13 +34,13 @@ class TestNearestProfiles:
     def test_nearest_profiles_is_exact(self):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.nearest import nearest_profiles as _nearest_profiles
+        from torchsym.mesh.nearest import nearest_profiles
 
         rng = np.random.default_rng(0)
         data = rng.standard_normal((700, 64))
         queries = data[rng.choice(700, 300)] + 0.05 * rng.standard_normal((300, 64))
-        np.testing.assert_array_equal(_nearest_profiles(queries, data, chunk=128), cKDTree(data).query(queries)[1])
+        np.testing.assert_array_equal(nearest_profiles(queries, data, chunk=128), cKDTree(data).query(queries)[1])
         # distance profiles: non-negative, with a common offset of the order of their spread
         profiles = np.abs(rng.standard_normal((700, 64))) + 1.0
         near = profiles[rng.choice(700, 300)] + 0.05 * rng.standard_normal((300, 64))
-        np.testing.assert_array_equal(_nearest_profiles(near, profiles), cKDTree(profiles).query(near)[1])
+        np.testing.assert_array_equal(nearest_profiles(near, profiles), cKDTree(profiles).query(near)[1])

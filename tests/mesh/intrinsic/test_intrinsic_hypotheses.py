@@ -14,20 +14,20 @@ from torchsym.metrics.mesh import correspondence_rate
 class TestSignHypotheses:
 
     def test_a_flipped_low_confidence_sign_is_repaired(self, spectral):
-        from torchsym.mesh.intrinsic.hypotheses import sign_hypotheses as _sign_hypotheses
+        from torchsym.mesh.intrinsic.hypotheses import sign_hypotheses
 
         evecs, signs = spectral
         confidence = np.ones(13)
         confidence[[4, 7, 9]] = [0.1, 0.05, 0.2]  # the three least confident
         wrong = signs.copy()
         wrong[7] *= -1
-        chosen, before, after = _sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
+        chosen, before, after = sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
         np.testing.assert_array_equal(chosen, signs)
         assert after < 0.6 * before
         # a confident wrong sign is outside the hypotheses and stays
         wrong = signs.copy()
         wrong[2] *= -1
-        chosen, _, _ = _sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
+        chosen, _, _ = sign_hypotheses(evecs, wrong, confidence, 3, 0.6, np.random.default_rng(0))
         assert chosen[2] == wrong[2]
 
     def test_thesis_rule_and_bad_setting(self, blob):
@@ -159,13 +159,13 @@ class TestExtrinsicHypothesis:
     def test_candidate_map_and_score(self, blob):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.intrinsic.hypotheses import extrinsic_candidate as _extrinsic_candidate
+        from torchsym.mesh.intrinsic.hypotheses import extrinsic_candidate
 
         mesh, gt = blob
         v = mesh.vertices.numpy()
         moved = v @ np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]]) + 3.0  # the plane need not be a coordinate one
         evecs = np.ones((v.shape[0], 1)) / np.sqrt(v.shape[0])
-        cand, score = _extrinsic_candidate(moved, evecs, np.ones(v.shape[0]), np.zeros((0, 2), dtype=np.int64), 3000, 7)
+        cand, score = extrinsic_candidate(moved, evecs, np.ones(v.shape[0]), np.zeros((0, 2), dtype=np.int64), 3000, 7)
         assert cand.name == "extrinsic" and score > 0.9
         image = cKDTree(cand.target).query(cand.query)[1]
         assert (image == gt).mean() > 0.99

@@ -17,7 +17,7 @@ class TestRealign:
         """The true map with a cap of the blob sent to itself (the failure it is for): the
         realignment by geodesic distances to anchors restores the cap's mirror."""
         from torchsym.mesh.geodesic import geodesic_distances
-        from torchsym.mesh.intrinsic.realign import anchor_realignment as _anchor_realignment
+        from torchsym.mesh.intrinsic.realign import anchor_realignment
         from torchsym.mesh.operators import edge_graph
 
         mesh, gt = blob
@@ -35,7 +35,7 @@ class TestRealign:
             calls.extend(int(s) for s in sources)
             return geodesic_distances(graph, sources)
 
-        image = _anchor_realignment(distances, rows, broken, anchors, iters=3)
+        image = anchor_realignment(distances, rows, broken, anchors, iters=3)
         tol = 0.1 * np.ptp(v, axis=0).max()
         wrong_before = np.linalg.norm(v[broken[rows]] - v[gt[rows]], axis=1) > tol
         wrong_after = np.linalg.norm(v[image] - v[gt[rows]], axis=1) > tol
@@ -43,7 +43,7 @@ class TestRealign:
         assert wrong_after.mean() < 0.05
         assert len(calls) == len(set(calls))  # distances from a repeated source are read once
         with pytest.raises(InputValueError, match="anchors"):
-            _anchor_realignment(distances, rows, broken, np.array([rows.max() + 1]), iters=1)
+            anchor_realignment(distances, rows, broken, np.array([rows.max() + 1]), iters=1)
 
     def test_exact_symmetry_is_left_alone(self, solved):
         result, mesh, gt = solved

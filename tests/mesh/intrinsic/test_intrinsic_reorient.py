@@ -15,19 +15,19 @@ class TestOrientationCheck:
     """Step 12: a final map that keeps the surface's orientation is refined again with the orientation penalty."""
 
     def test_oriented_fit_is_the_exact_minimiser(self, spectral25):
-        from torchsym.mesh.fmaps import zoomout_fit as _zoomout_fit
-        from torchsym.mesh.intrinsic.reorient import oriented_fits as _oriented_fits
+        from torchsym.mesh.fmaps import zoomout_fit
+        from torchsym.mesh.intrinsic.reorient import oriented_fits
 
         big, area, ops, rows, gt = spectral25
         kk, weight = 16, 30.0
-        factor = _oriented_fits(big, area, rows, np.array([kk]), ops, (weight,))[0][kk]
+        factor = oriented_fits(big, area, rows, np.array([kk]), ops, (weight,))[0][kk]
         phi = big[rows, :kk]
         w = area[rows] / area[rows].sum()
         image = gt[rows].copy()
         wrong = np.random.default_rng(2).random(rows.size) < 0.3
         image[wrong] = rows[wrong]  # a third of the map left in place: no exact fit
         target = big[image, :kk]
-        c = _zoomout_fit(big[:, :kk], area, rows, image, factor)
+        c = zoomout_fit(big[:, :kk], area, rows, image, factor)
         o = ops[:, :kk, :kk]
         scale = 2.0 * np.sum(o**2) + 2.0 * np.sum(np.trace(o, axis1=1, axis2=2) ** 2) / kk
 
@@ -44,19 +44,19 @@ class TestOrientationCheck:
             assert abs(up - down) < 1e-6 * (up + down - 2 * base)
 
     def test_penalty_keeps_the_mirror_and_dislodges_the_identity(self, spectral25):
-        from torchsym.mesh.fmaps import zoomout as _sampled_zoomout
-        from torchsym.mesh.intrinsic.reorient import oriented_fits as _oriented_fits
-        from torchsym.mesh.nearest import SampledSearch as _Searches
+        from torchsym.mesh.fmaps import zoomout
+        from torchsym.mesh.intrinsic.reorient import oriented_fits
+        from torchsym.mesh.nearest import SampledSearch
 
         big, area, ops, rows, gt = spectral25
         ks = np.array([16, 19, 22, 25])
-        trees = _Searches(big, None)
-        oriented = _oriented_fits(big, area, rows, ks, ops, (30.0,))[0]
-        mirror, _ = _sampled_zoomout(big, area, rows, gt[rows], ks, trees, True, oriented)
+        trees = SampledSearch(big, None)
+        oriented = oriented_fits(big, area, rows, ks, ops, (30.0,))[0]
+        mirror, _ = zoomout(big, area, rows, gt[rows], ks, trees, True, oriented)
         assert np.mean(mirror == gt[rows]) > 0.99
-        plain, _ = _sampled_zoomout(big, area, rows, rows.copy(), ks, trees, True)
+        plain, _ = zoomout(big, area, rows, rows.copy(), ks, trees, True)
         assert np.mean(plain == rows) > 0.99  # plain ZoomOut cannot leave the identity
-        moved, _ = _sampled_zoomout(big, area, rows, rows.copy(), ks, trees, True, oriented)
+        moved, _ = zoomout(big, area, rows, rows.copy(), ks, trees, True, oriented)
         assert np.mean(moved == rows) < 0.2
 
     @staticmethod
@@ -80,11 +80,11 @@ class TestOrientationCheck:
         return Mesh(torch.from_numpy(w), s.faces), maps
 
     @staticmethod
-    def _turn_refiner(intrinsic, maps, oriented_too: bool = False):
+    def _turn_refiner(fmaps, maps, oriented_too: bool = False):
         """A stand-in for ZoomOut whose plain refinement (and with ``oriented_too`` every one) ends on the half turn."""
-        from torchsym.mesh.fmaps import fit_functional as _fit_functional
+        from torchsym.mesh.fmaps import fit_functional
 
-        original = intrinsic.zoomout
+        original = fmaps.zoomout
 
         def refine_to_the_turn(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             # an isometric involution that keeps the orientation
@@ -92,18 +92,18 @@ class TestOrientationCheck:
                 return original(big, area, rows, image, ks, trees, involution, oriented, brute=brute)
             k = int(ks[-1])
             turn = maps["turn"][rows]
-            return turn, _fit_functional(big[rows, :k], big[turn, :k], area[rows])
+            return turn, fit_functional(big[rows, :k], big[turn, :k], area[rows])
 
         return refine_to_the_turn
 
     def test_a_map_that_keeps_orientation_is_replaced(self, monkeypatch):
-        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh import fmaps
         from torchsym.mesh.orientation import orientation_reversal
 
         mesh, maps = self._two_mirror_blob()
         v, f = mesh.vertices.numpy(), mesh.faces.numpy()
         assert np.mean(orientation_reversal(v, f, maps["turn"]) < 0) == 0.0
-        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps))
+        monkeypatch.setattr(fmaps, "zoomout", self._turn_refiner(fmaps, maps))
         off = intrinsic_symmetry(mesh, refine={"orientation_weight": 0.0})
         assert np.mean(off.map.numpy() == maps["turn"]) > 0.95 and "orientation_check" not in off.timings
         out = intrinsic_symmetry(mesh)
@@ -122,9 +122,9 @@ class TestOrientationCheck:
             intrinsic_symmetry(blob[0], refine={"orientation_weight": -1.0})
 
     @staticmethod
-    def _drifting_refiner(intrinsic):
+    def _drifting_refiner(fmaps):
         """A stand-in for ZoomOut whose plain refinement drifts to the identity on every hypothesis, so none passes step 9."""
-        original = intrinsic.zoomout
+        original = fmaps.zoomout
 
         def plain_drifts_home(big, area, rows, image, ks, trees, involution=True, oriented=None, brute=False):
             if oriented is not None:
@@ -134,10 +134,10 @@ class TestOrientationCheck:
         return plain_drifts_home
 
     def test_rescues_when_no_hypothesis_passes(self, blob, monkeypatch, settings_spy):
-        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh import fmaps
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "zoomout", self._drifting_refiner(intrinsic))
+        monkeypatch.setattr(fmaps, "zoomout", self._drifting_refiner(fmaps))
         off = intrinsic_symmetry(mesh, refine={"orientation_weight": 0.0})
         assert any("returned unrefined and is unreliable" in n for n in off.notes)
         out = intrinsic_symmetry(mesh)
@@ -148,11 +148,11 @@ class TestOrientationCheck:
 
     def test_rescue_allows_more_distortion(self, blob, monkeypatch, settings_spy):
         """With no passing hypothesis the rescue takes maps up to 1.5x the distortion limit, and says so."""
-        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh import fmaps
         from torchsym.mesh.intrinsic import GeodesicProbe
 
         mesh, gt = blob
-        monkeypatch.setattr(intrinsic, "zoomout", self._drifting_refiner(intrinsic))
+        monkeypatch.setattr(fmaps, "zoomout", self._drifting_refiner(fmaps))
         monkeypatch.setattr(GeodesicProbe, "distortion", lambda self, image: 0.15)
         out = intrinsic_symmetry(mesh, select={"max_distortion": 0.12})  # 0.15 < 1.5 x 0.12
         assert any("distorts geodesics by 0.150, above the limit 0.12: the map is less reliable" in n for n in out.notes)
@@ -162,17 +162,17 @@ class TestOrientationCheck:
         assert not any("refined with the orientation penalty" in n for n in tight.notes)
 
     def test_no_reoriented_map_found_keeps_the_map(self, monkeypatch):
-        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh import fmaps
 
         mesh, maps = self._two_mirror_blob()
-        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps, oriented_too=True))
+        monkeypatch.setattr(fmaps, "zoomout", self._turn_refiner(fmaps, maps, oriented_too=True))
         out = intrinsic_symmetry(mesh)
         assert np.mean(out.map.numpy() == maps["turn"]) > 0.95
         assert any("found no map that reverses it at 60%, the map is unreliable" in n for n in out.notes)
 
     def test_skipped_on_inconsistent_winding(self, blob, monkeypatch, settings_spy):
         from torchsym.mesh import consistently_wound
-        from torchsym.mesh import fmaps as intrinsic
+        from torchsym.mesh import fmaps
 
         mesh, maps = self._two_mirror_blob()
         f = mesh.faces.numpy().copy()
@@ -186,7 +186,7 @@ class TestOrientationCheck:
         assert _pair_keys(np.array([[0, 3_000_000_000]])) is None  # the slow exact path
         huge = mesh.faces.numpy() + 3_000_000_000  # indices only: the winding test needs no vertices
         assert consistently_wound(huge) and not consistently_wound(f + 3_000_000_000)
-        monkeypatch.setattr(intrinsic, "zoomout", self._turn_refiner(intrinsic, maps))
+        monkeypatch.setattr(fmaps, "zoomout", self._turn_refiner(fmaps, maps))
         out = intrinsic_symmetry(Mesh(mesh.vertices, torch.from_numpy(f)))
         assert "orientation_check" not in out.timings
         assert any("not consistently wound" in n for n in out.notes)

@@ -16,14 +16,14 @@ class TestVertexSubsample:
     def test_even_subset(self):
         from scipy.spatial import cKDTree
 
-        from torchsym.mesh.intrinsic.sample import even_subset as _even_subset
+        from torchsym.mesh.intrinsic.sample import even_subset
         from torchsym.mesh.synthetic import icosphere
 
         v = icosphere(4).vertices.double().numpy()  # (2562, 3)
         v = v / np.sqrt(4 * np.pi)  # about unit area
         rng = np.random.default_rng(0)
         rows = np.sort(rng.choice(v.shape[0], size=100, replace=False))
-        sub = _even_subset(v, rows, 500, np.random.default_rng(1))
+        sub = even_subset(v, rows, 500, np.random.default_rng(1))
         assert np.all(np.diff(sub) > 0) and np.isin(rows, sub).all() and 400 < sub.size <= 500
         # every vertex nearer a kept one than with a uniformly random subset of the same size
         gap = cKDTree(v[sub]).query(v)[0].max()
@@ -33,8 +33,8 @@ class TestVertexSubsample:
         ]
         assert gap < min(random_gaps)
         # the same generator state, the same subset; rows beyond m are all kept
-        assert np.array_equal(sub, _even_subset(v, rows, 500, np.random.default_rng(1)))
-        assert np.array_equal(_even_subset(v, rows, 50, np.random.default_rng(1)), rows)
+        assert np.array_equal(sub, even_subset(v, rows, 500, np.random.default_rng(1)))
+        assert np.array_equal(even_subset(v, rows, 50, np.random.default_rng(1)), rows)
 
     def test_sample_seed_read_ahead(self, blob, monkeypatch):
         # step 9's sample is drawn from the seed after the eigensolver's and one per pairing
@@ -81,11 +81,11 @@ class TestVertexSubsample:
         assert 200 < sizes[2] <= 320 and "select.max_search_vertices raised from 200 to 320, twice the vertex sample" in raised.notes
 
     def test_map_before_refine_is_searched_when_first_read(self, blob):
-        from torchsym.mesh.intrinsic.result import Deferred as _Deferred
+        from torchsym.mesh.intrinsic.result import Deferred
 
         mesh, _ = blob
         result = intrinsic_symmetry(mesh)
-        assert isinstance(object.__getattribute__(result, "map_before_refine"), _Deferred)
+        assert isinstance(object.__getattribute__(result, "map_before_refine"), Deferred)
         first = result.map_before_refine
         assert first.dtype == torch.int64 and first.shape == result.map.shape
         assert result.map_before_refine is first  # searched once

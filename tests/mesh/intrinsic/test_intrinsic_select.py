@@ -38,19 +38,19 @@ def test_intrinsic_symmetry_keeps_the_thesis_map_on_a_nearly_ambiguous_shape(blo
 
 
 def test_rank_choice_rules():
-    from torchsym.mesh.intrinsic.select import rank_choice as _rank_choice
+    from torchsym.mesh.intrinsic.select import rank_choice
 
     inf = np.inf
     # the challenger ranks first and distorts geodesics less: it wins
-    assert _rank_choice(np.array([[2.0, 4.0, 0.05], [1.0, 2.0, 0.03]]), 0.08) == 1
+    assert rank_choice(np.array([[2.0, 4.0, 0.05], [1.0, 2.0, 0.03]]), 0.08) == 1
     # ranks first on the functional defects but distorts geodesics more: the thesis's map stays
-    assert _rank_choice(np.array([[2.0, 4.0, 0.03], [1.0, 2.0, 0.04]]), 0.08) == 0
+    assert rank_choice(np.array([[2.0, 4.0, 0.03], [1.0, 2.0, 0.04]]), 0.08) == 0
     # too much distortion in absolute terms: stays
-    assert _rank_choice(np.array([[2.0, 4.0, 0.30], [1.0, 2.0, 0.10]]), 0.08) == 0
+    assert rank_choice(np.array([[2.0, 4.0, 0.30], [1.0, 2.0, 0.10]]), 0.08) == 0
     # an unusable thesis map: a usable challenger below the limit wins, else row 0
-    assert _rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.05]]), 0.08) == 1
-    assert _rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.30]]), 0.08) == 0
-    assert _rank_choice(np.array([[inf, inf, inf], [inf, inf, inf]]), 0.08) == 0
+    assert rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.05]]), 0.08) == 1
+    assert rank_choice(np.array([[inf, inf, inf], [1.0, 2.0, 0.30]]), 0.08) == 0
+    assert rank_choice(np.array([[inf, inf, inf], [inf, inf, inf]]), 0.08) == 0
 
 
 def test_selection_without_refinement_and_with_few_samples(blob):
