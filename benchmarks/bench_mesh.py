@@ -30,7 +30,6 @@ the synthetic set (``--timing-only`` reruns just these rows).
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import logging
 import math
@@ -52,7 +51,7 @@ from torchsym.mesh import (
     intrinsic_symmetry,
     laplacian_eigen,
 )
-from torchsym.mesh.intrinsic import GeodesicProbe
+from torchsym.mesh.intrinsic import GeodesicProbe, IntrinsicSymmetrySettings
 from torchsym.mesh.operators import edge_graph
 from torchsym.mesh.synthetic import mirror_complete, punch_holes, twist
 from torchsym.metrics.mesh import correspondence_rate, mesh_rate
@@ -63,8 +62,8 @@ SYNTHETIC = ["man", "mannequin-devil", "camel", "elephant", "cow", "bull", "lion
              "homer", "triceratops", "pig"]
 
 
-_DEFAULT_REFINE_K = inspect.signature(intrinsic_symmetry).parameters["refine_k"].default
-_DEFAULT_POLISH_K = inspect.signature(intrinsic_symmetry).parameters["polish_k"].default
+_DEFAULT_REFINE_K = IntrinsicSymmetrySettings().refine.n_eigen
+_DEFAULT_POLISH_K = IntrinsicSymmetrySettings().polish.n_eigen
 
 
 def most_symmetric_axis(v: np.ndarray) -> int:
@@ -179,31 +178,31 @@ def evaluate(items, use_pyfm: bool) -> dict:
         row = {"name": name, "vertices": mesh.num_vertices, "ours": ours, "ours_edges": ours_edges, "time": res.timings["total"],
                "eigen": res.timings["eigen"], "pairs": int(res.pairs.shape[0]), "hypothesis": res.hypothesis}
         # ablation: the same solver without the orientation-reversing and extrinsic hypotheses
-        pairs_only = intrinsic_symmetry(mesh, orientation_hypothesis=False, extrinsic_hypothesis=False)
+        pairs_only = intrinsic_symmetry(mesh, hypotheses={"orientation": False}, extrinsic={"enabled": False})
         row["pairs_only"] = correspondence_rate(mesh, pairs_only.map, ground_truth=gt).rate
         # ablation: without the extrinsic hypothesis (the same map where it was not chosen)
         row["no_extrinsic"] = ours
         if res.hypothesis == "extrinsic":
             row["no_extrinsic"] = correspondence_rate(
-                mesh, intrinsic_symmetry(mesh, extrinsic_hypothesis=False).map, ground_truth=gt
+                mesh, intrinsic_symmetry(mesh, extrinsic={"enabled": False}).map, ground_truth=gt
             ).rate
         # ablation: without the orientation check (the same map where it did not re-refine)
         row["reoriented"] = any("with the orientation penalty, it reverses" in n for n in res.notes)
         row["no_orientation_check"] = ours
         if row["reoriented"]:
             row["no_orientation_check"] = correspondence_rate(
-                mesh, intrinsic_symmetry(mesh, refine_orientation=0.0).map, ground_truth=gt
+                mesh, intrinsic_symmetry(mesh, refine={"orientation_weight": 0.0}).map, ground_truth=gt
             ).rate
-        # ablation: without step 13, the polish to polish_k eigenfunctions (the same map where it was not kept)
+        # ablation: without step 13, the polish to polish.n_eigen eigenfunctions (the same map where it was not kept)
         row["polished"] = int(res.refined_functional_map.shape[0]) > _DEFAULT_REFINE_K
         row["no_polish"] = ours
         if row["polished"]:
-            row["no_polish"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, polish_iters=0).map, ground_truth=gt).rate
+            row["no_polish"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, polish={"enabled": False}).map, ground_truth=gt).rate
         # ablation: without step 14, the realignment by distances to anchors (the same map where it was not kept)
         row["realigned"] = any(n.startswith("realigned by") for n in res.notes)
         row["no_realign"] = ours
         if row["realigned"]:
-            row["no_realign"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, realign_anchors=0).map, ground_truth=gt).rate
+            row["no_realign"] = correspondence_rate(mesh, intrinsic_symmetry(mesh, realign={"enabled": False}).map, ground_truth=gt).rate
         # ablation: without closing the holes first (the same map on a closed mesh)
         row["holes_closed"] = res.holes_closed
         row["no_fill"] = ours
@@ -262,7 +261,7 @@ def timing_row(folder: Path, reps: int = 7) -> dict:
     and, under ``"bent"``, on the same mesh twisted as in the synthetic set (nearly isometric).
 
     The floor is the eigendecomposition alone (:func:`laplacian_eigen` with the solver's
-    ``polish_k`` eigenpairs), timed on its own after each run: inside the solver the
+    ``polish.n_eigen`` eigenpairs), timed on its own after each run: inside the solver the
     non-spectral work runs beside it on the second core, which slows it slightly.
     """
     path = folder / "mannequin-devil.off"
@@ -314,9 +313,9 @@ def render(results: dict, timing: dict) -> str:
             "often it was chosen; torchsym without closing "
             "the holes first (`fill_holes=False`; the same run on meshes without holes), and on how "
             "many meshes holes were closed; torchsym without the orientation check of its final map "
-            "(`refine_orientation=0`), and on how many meshes that check refined the map again (or rescued it where no hypothesis passed); torchsym without step 13, the polish from 25 to 40 "
-            "eigenfunctions (`polish_iters=0`), and on how many meshes the polished map was kept; torchsym without "
-            "step 14, the realignment by distances to anchors (`realign_anchors=0`), and on how many meshes the "
+            "(`refine.orientation_weight=0`), and on how many meshes that check refined the map again (or rescued it where no hypothesis passed); torchsym without step 13, the polish from 25 to 40 "
+            "eigenfunctions (`polish.enabled=false`), and on how many meshes the polished map was kept; torchsym without "
+            "step 14, the realignment by distances to anchors (`realign.enabled=false`), and on how many meshes the "
             "realigned map was kept. Failed: meshes at or below "
             "75 %, and on how many of them the ground-truth map distorts geodesics more than ours "
             "(mean relative error of 60 x 600 sampled distances) while ours is no partial identity "

@@ -37,3 +37,15 @@ def rigid_motion() -> tuple[np.ndarray, np.ndarray]:
     if np.linalg.det(q) < 0:
         q[:, 0] *= -1
     return q, rng.standard_normal(3) * 5
+
+
+@pytest.fixture(scope="module")
+def spectral(blob):
+    from torchsym.mesh.operators import laplacian_eigen, mass_matrix
+
+    mesh, gt = blob
+    v, f = mesh.vertices.numpy(), mesh.faces.numpy()
+    _, evecs = laplacian_eigen(v, f, 13, generator=torch.Generator().manual_seed(0))
+    area = mass_matrix(v, f).diagonal()
+    signs = np.sign((area[:, None] * evecs * evecs[gt]).sum(0))  # even +1, odd -1
+    return evecs, signs

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.errors import InputValueError
+from torchsym.errors import ConfigError
 from torchsym.mesh.intrinsic import intrinsic_symmetry
 from torchsym.mesh.operators import edge_face_counts
 from torchsym.mesh.repair import HoleFilling, _loop_spans, boundary_loops, close_holes
@@ -153,7 +153,7 @@ class TestIntrinsicSymmetryWithHoles:
         assert filled.holes_closed >= 1 and any("fill_holes" in note for note in filled.notes)
         assert correspondence_rate(holed, filled.map, ground_truth=truth).rate > 0.95
         assert int(filled.map.max()) < holed.num_vertices  # a map of the input's vertices
-        plain = intrinsic_symmetry(holed, fill_holes=False, extrinsic_hypothesis=False)
+        plain = intrinsic_symmetry(holed, fill_holes=False, extrinsic={"enabled": False})
         assert plain.holes_closed == 0
         assert correspondence_rate(holed, plain.map, ground_truth=truth).rate < 0.5
         assert torch.equal(holed.vertices, verts) and torch.equal(holed.faces, faces)  # input untouched
@@ -161,5 +161,5 @@ class TestIntrinsicSymmetryWithHoles:
         assert torch.equal(again.map, filled.map)
 
     def test_bad_flag(self, blob):
-        with pytest.raises(InputValueError, match="fill_holes: expected True or False"):
+        with pytest.raises(ConfigError, match="fill_holes: expected true or false"):
             intrinsic_symmetry(blob[0], fill_holes="yes")

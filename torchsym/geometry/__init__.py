@@ -1,4 +1,6 @@
-"""Reflection geometry in d dimensions, batched and differentiable."""
+"""Reflection geometry in d dimensions, batched and differentiable, and the triangle mesh type."""
+
+from torchsym.geometry.mesh import Mesh
 
 from torchsym.geometry.reflection import (
     angles_to_normal,
@@ -19,6 +21,7 @@ from torchsym.geometry.reflection import (
 from torchsym.geometry.sampling import sphere_normals
 
 __all__ = [
+    "Mesh",
     "angles_to_normal",
     "canonical_sign",
     "normal_to_angles",

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from torchsym.errors import InputFileError, InputShapeError
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 
 __all__ = [
     "IMAGE_SUFFIXES",

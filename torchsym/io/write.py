@@ -98,7 +98,7 @@ def write_mesh(path: str | Path, mesh: Any, *, colors: Any | None = None) -> Pat
     import pymeshlab
 
     from torchsym.errors import InputShapeError
-    from torchsym.mesh.mesh import Mesh
+    from torchsym.geometry.mesh import Mesh
 
     if not isinstance(mesh, Mesh):
         raise InputShapeError(f"mesh: expected a torchsym.mesh.Mesh, got {type(mesh).__name__}")

@@ -13,16 +13,21 @@ from torchsym.mesh.geodesic import (
     thin_points,
 )
 from torchsym.mesh.hks import heat_kernel_signature, hks_feature_points, hks_times
+from torchsym.mesh.fmaps import (
+    functional_to_pointwise,
+    map_consistency,
+    map_quality,
+    nearest_involution,
+    pointwise_to_functional,
+    zoomout,
+)
 from torchsym.mesh.intrinsic import (
     IntrinsicSymmetry,
     IntrinsicSymmetryResult,
+    IntrinsicSymmetrySettings,
     intrinsic_symmetry,
-    map_consistency,
-    map_quality,
-    pointwise_to_functional,
-    symmetry_colors,
 )
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 from torchsym.mesh.operators import (
     adjacency_matrix,
     consistently_wound,
@@ -36,7 +41,6 @@ from torchsym.mesh.operators import (
 from torchsym.mesh.orientation import (
     anticommutation_penalty,
     descriptor_operators,
-    functional_to_pointwise,
     orientation_operators,
     orientation_reversal,
     orientation_reversing_map,
@@ -52,6 +56,7 @@ __all__ = [
     "HoleFilling",
     "IntrinsicSymmetry",
     "IntrinsicSymmetryResult",
+    "IntrinsicSymmetrySettings",
     "Mesh",
     "ValidatedMesh",
     "adjacency_matrix",
@@ -76,6 +81,7 @@ __all__ = [
     "map_consistency",
     "map_quality",
     "mass_matrix",
+    "nearest_involution",
     "orientation_operators",
     "orientation_reversal",
     "orientation_reversing_map",
@@ -88,7 +94,7 @@ __all__ = [
     "split_fans",
     "surface_geodesic_lengths",
     "symmetric_pairs",
-    "symmetry_colors",
     "thin_points",
     "validate_mesh",
+    "zoomout",
 ]

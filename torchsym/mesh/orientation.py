@@ -34,7 +34,6 @@ compare terms of equal scale.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from torchsym.core.checks import check_positive
 from torchsym.errors import InputShapeError, InputValueError, SolverError
@@ -43,7 +42,6 @@ from torchsym.mesh.operators import ring_neighbourhood
 __all__ = [
     "anticommutation_penalty",
     "descriptor_operators",
-    "functional_to_pointwise",
     "orientation_operators",
     "OrientationTest",
     "orientation_reversal",
@@ -238,7 +236,7 @@ def orientation_reversing_map(
 
     Returns:
         ``C`` such that ``Phi C^T`` at a vertex's mirror is close to ``Phi`` at the vertex;
-        :func:`functional_to_pointwise` turns it into a point map.
+        :func:`~torchsym.mesh.fmaps.functional_to_pointwise` turns it into a point map.
     """
     k = evecs.shape[1]
     weights = np.array(
@@ -407,8 +405,3 @@ class OrientationTest:
             np.logical_or.at(bad, self.entry_row, missing[nbr])
             out[bad] = 0
         return out
-
-
-def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
-    """The point map of a self functional map: vertex ``i`` goes to the row of ``Phi C^T`` nearest ``Phi[i]``."""
-    return cKDTree(evecs @ fmap.T).query(evecs, k=1, workers=-1)[1].astype(np.int64)

@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import connected_components
 from torchsym.core.random import numpy_rng
 from torchsym.errors import InputValueError
 from torchsym.mesh.geodesic import geodesic_distances
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 from torchsym.mesh.operators import edge_graph, face_areas
 
 __all__ = ["icosphere", "mirror_complete", "punch_holes", "twist"]

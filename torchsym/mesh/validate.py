@@ -1,6 +1,6 @@
 """Checks a triangle mesh before any operator runs on it.
 
-:class:`~torchsym.mesh.mesh.Mesh` already checks shapes, dtypes, finiteness and index
+:class:`~torchsym.geometry.mesh.Mesh` already checks shapes, dtypes, finiteness and index
 range. :func:`validate_mesh` adds what the spectral methods of Chapter 6 need: at least
 one triangle, no degenerate triangles, manifold edges, and one connected component (the
 largest is kept by default, and the result says which vertices were dropped).
@@ -18,7 +18,7 @@ from scipy.sparse.csgraph import connected_components
 
 from torchsym.core.checks import check_finite
 from torchsym.errors import InputShapeError, InputValueError
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 from torchsym.mesh.operators import edge_face_counts, face_areas
 
 __all__ = ["ValidatedMesh", "validate_mesh"]

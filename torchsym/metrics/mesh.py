@@ -25,7 +25,7 @@ import torch
 from torchsym.core.results import Result
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.mesh.geodesic import geodesic_distances, surface_geodesic_lengths
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 from torchsym.mesh.operators import edge_graph, face_areas
 
 __all__ = ["CorrespondenceScore", "correspondence_rate", "mesh_rate", "symmetry_threshold"]

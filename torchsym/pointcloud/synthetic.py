@@ -16,7 +16,7 @@ from torchsym.core.random import make_generator
 from torchsym.core.results import Result
 from torchsym.geometry.reflection import reflect_points
 from torchsym.manifolds.special_orthogonal import SpecialOrthogonal
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 
 __all__ = [
     "SymmetricCloud",

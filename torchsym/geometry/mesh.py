@@ -1,4 +1,4 @@
-"""The triangle mesh type shared by every mesh method."""
+"""The triangle mesh type shared by io, the point-cloud samplers and every mesh method."""
 
 from __future__ import annotations
 

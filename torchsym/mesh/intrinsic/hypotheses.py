@@ -1,0 +1,230 @@
+"""Steps 4-8 and the map of step 10: the hypotheses of the symmetry.
+
+The thesis's (Sec. 6.2.4-6.2.7): sparse pairs of feature points, the signs of the
+eigenfunctions from geodesics between them (``C = diag(s)``), the correction ``R`` and the
+dense map. Extensions: the pairs on HKS alone, both signs of the least-confident
+eigenfunctions, an orientation-reversing functional map fitted to the dense HKS, and the
+vertices' mirror plane.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+import torch
+from scipy.spatial import cKDTree
+
+from torchsym.core.random import random_subset
+from torchsym.mesh.correction import correct_eigenfunctions
+from torchsym.mesh.fmaps import consistency, map_consistency, pointwise_to_functional
+from torchsym.mesh.geodesic import geodesic_distances
+from torchsym.mesh.intrinsic.sample import sign_sample
+from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
+from torchsym.mesh.intrinsic.workspace import Workspace
+from torchsym.mesh.nearest import Nearest, kdtree
+from torchsym.mesh.orientation import orientation_reversing_map
+from torchsym.mesh.pairs import eigenfunction_signs, symmetric_pairs
+from torchsym.pointcloud.reflection_plane import detect_reflection_plane
+
+__all__ = [
+    "HYPOTHESIS_TEXT",
+    "Candidate",
+    "extrinsic_candidate",
+    "first_image",
+    "orientation_candidate",
+    "pair_features",
+    "pairing_candidates",
+    "sign_hypotheses",
+]
+
+HYPOTHESIS_TEXT = {
+    "pairs": "thesis's pairs",
+    "hks_pairs": "pairs on HKS alone (pairs.spectral_weight 0)",
+    "orientation": "orientation-reversing functional map",
+    "extrinsic": "extrinsic reflection plane of the vertices",
+}
+
+
+@dataclasses.dataclass
+class Candidate:
+    """One hypothesis: its map sends vertex ``i`` to the row of ``target`` nearest ``query[i]``.
+
+    Attributes:
+        name: ``"pairs"``, ``"hks_pairs"``, ``"orientation"`` or ``"extrinsic"``.
+        pairs: ``(P, 2)`` its sparse pairs. fmap: ``(k, k)`` its ``C``. rotation: ``(k, k)`` ``R``.
+        converged: the correction converged. target, query: ``(V, m)`` rows of the map's search.
+        usable: worth testing (not the identity). notes: its notes.
+        refined: ``C`` of its ZoomOut refinement in step 9 (None: not refined).
+        start: its map on step 9's sample ``(S,)`` (None: a duplicate or unusable).
+    """
+
+    name: str
+    pairs: np.ndarray
+    fmap: np.ndarray
+    rotation: np.ndarray
+    converged: bool
+    target: np.ndarray
+    query: np.ndarray
+    usable: bool
+    notes: list[str]
+    refined: np.ndarray | None = None
+    start: np.ndarray | None = None
+
+
+def first_image(ws: Workspace, cand: Candidate) -> np.ndarray:
+    """The hypothesis's map on step 9's sample, ``(S,)`` vertices."""
+    return ws.search.to_vertices(Nearest(ws.search.sample_points(cand.target)).query(cand.query[ws.rows]))
+
+
+def pair_features(
+    graph, features: np.ndarray, desc: np.ndarray, evecs: np.ndarray, weights: tuple[float, ...], settings: IntrinsicSymmetrySettings
+) -> tuple[list[np.ndarray], list[list[str]]]:
+    """Step 4: sparse pairs ``(P, 2)`` of the feature points ``(d,)`` by Eq. 6.1 (HKS ``desc (d, h)``), one set per spectral weight."""
+    feat_dist = geodesic_distances(graph, features)[:, features]  # (d, d)
+    pair_sets, pair_notes = [], []
+    p = settings.pairs
+    for weight in weights:
+        pairs, _ = symmetric_pairs(
+            features, desc, evecs[features], distances=feat_dist, max_pairs=p.max_feature_pairs, max_cost=p.max_cost,
+            penalty=p.penalty, spectral_weight=weight,
+        )  # (P, 2)
+        pair_sets.append(pairs)
+        pair_notes.append(
+            ["no pair of feature points passed the affinity test: no symmetry found, the map is the identity"] if pairs.shape[0] == 0 else []
+        )
+    return pair_sets, pair_notes
+
+
+def sign_hypotheses(
+    emb: np.ndarray,
+    signs: np.ndarray,
+    confidence: np.ndarray,
+    n_flip: int,
+    margin: float,
+    rng: np.random.Generator | tuple[np.ndarray, np.ndarray | None],
+    accept: float = 0.1,
+    points: np.ndarray | None = None,
+    max_points: int = 6000,
+) -> tuple[np.ndarray, float, float]:
+    """Step 7's extension: both signs of the ``n_flip`` least-confident eigenfunctions; the most consistent kept.
+
+    ``emb``: ``(V, k)`` the corrected embedding; ``signs``, ``confidence``: ``(k,)``. The
+    thesis's signs stay when their :func:`~torchsym.mesh.fmaps.map_consistency` is below
+    ``accept`` or no trial beats ``margin`` times it. ``rng``: the generator of the 800-vertex
+    sample, or the sample (:func:`~torchsym.mesh.intrinsic.sample.sign_sample`); with
+    ``points`` (``(V, 3)``) on more than ``max_points`` vertices, images are sought among an even subset.
+
+    Returns:
+        The chosen signs ``(k,)``, the thesis's consistency and the chosen one's.
+    """
+    use = np.nonzero(signs != 0)[0]
+    use = use[use != 0]  # the constant eigenfunction is always even
+    flip = use[np.argsort(np.abs(confidence[use]), kind="stable")[:n_flip]]
+    cols = signs != 0
+    sub_emb = emb[:, cols]
+    rows, keep = sign_sample(emb.shape[0], rng, points, max_points) if isinstance(rng, np.random.Generator) else rng
+    if keep is not None:  # the images among an even subset that holds the rows
+        sub_emb, rows = sub_emb[keep], np.searchsorted(keep, rows)
+    tree = cKDTree(sub_emb)  # default leaves: its searches are approximate (eps), so the leaf size would change them
+    base = consistency(sub_emb, signs[cols], rows, Nearest(sub_emb, tree=tree).query(sub_emb[rows] * signs[cols]))
+    if base < accept:
+        return signs, base, base
+    base = map_consistency(tree, sub_emb, signs[cols], rows, approx=1.0)  # compared like with like
+    best, best_q = signs, base
+    for mask in range(1, 2 ** flip.size):
+        trial = signs.copy()
+        chosen = flip[[(mask >> b) & 1 == 1 for b in range(flip.size)]]
+        trial[chosen] *= -1.0
+        q = map_consistency(tree, sub_emb, trial[cols], rows, approx=1.0)
+        if q < best_q:
+            best, best_q = trial, q
+    if best_q >= margin * base:
+        return signs, base, base
+    return best, base, best_q
+
+
+def _pairing_candidate(
+    ws: Workspace, pairs: np.ndarray, cand_notes: list[str], sign_draw, weight: float, timings: dict[str, float]
+) -> Candidate:
+    """Steps 5-7 for one pairing: signs, correction, and the map's rows."""
+    s, evecs, evals = ws.settings, ws.evecs, ws.evals
+    tic = time.perf_counter()
+    signs, confidence = eigenfunction_signs(
+        evecs, ws.v, ws.graph, pairs, cross_pairs=s.signs.cross_pairs, min_confidence=s.signs.min_confidence
+    )  # (k,)
+    signs[0] = 1.0  # the constant eigenfunction is even
+    if not pairs.shape[0]:
+        signs[:] = 1.0  # no evidence: C = I, whose map is the identity
+    timings["signs"], tic = timings["signs"] + time.perf_counter() - tic, time.perf_counter()
+
+    rotation = np.eye(ws.plan.n_eigen)
+    converged = True
+    fb_sparse = np.concatenate([evecs[pairs[:, 0]], evecs[pairs[:, 1]]], axis=0).T  # (k, 2P)
+    gb_sparse = np.concatenate([evecs[pairs[:, 1]], evecs[pairs[:, 0]]], axis=0).T  # (k, 2P)
+    if s.correction.enabled and not pairs.shape[0]:
+        cand_notes.append("eigenfunction correction skipped: it needs at least one pair")
+    if s.correction.enabled and pairs.shape[0]:
+        res = correct_eigenfunctions(evals / evals[-1], fb_sparse, gb_sparse, signs, mu=s.correction.mu, max_iter=s.correction.max_iters)
+        rotation, converged = res.rotation.numpy(), converged and res.converged
+    timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
+
+    emb = evecs @ rotation  # (V', k)
+    if sign_draw is not None:
+        signs, q_thesis, q_chosen = sign_hypotheses(
+            emb, signs, confidence, s.signs.n_uncertain, 0.6, sign_draw, points=ws.v, max_points=s.select.max_search_vertices
+        )
+        if q_chosen < q_thesis:
+            cand_notes.append(f"signs of C changed from the thesis's rule: map consistency {q_thesis:.3f} -> {q_chosen:.3f}")
+    use = signs != 0
+    # a map without an odd eigenfunction is the identity, which every test scores as perfect
+    usable = bool(pairs.shape[0]) and bool((signs < 0).any())
+    name = "pairs" if weight == s.pairs.spectral_weight else "hks_pairs"
+    cand = Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
+    timings["map"] += time.perf_counter() - tic
+    return cand
+
+
+def pairing_candidates(
+    ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list, timings: dict[str, float]
+) -> tuple[list[Candidate], list[np.ndarray]]:
+    """Steps 5-7 for each pairing, and each map on step 9's sample ``(S,)``."""
+    candidates = [
+        _pairing_candidate(ws, pairs, cand_notes, sign_draw, weight, timings)
+        for pairs, cand_notes, sign_draw, weight in zip(pair_sets, pair_notes, sign_draws, ws.plan.weights)
+    ]
+    tic = time.perf_counter()
+    images = [first_image(ws, cand) for cand in candidates]
+    timings["select"] += time.perf_counter() - tic
+    return candidates, images
+
+
+def orientation_candidate(ws: Workspace) -> tuple[Candidate, float]:
+    """Step 8: the orientation-reversing functional map fitted to the dense HKS
+    (:func:`~torchsym.mesh.orientation.orientation_reversing_map`), and the seconds taken.
+    Its pairs are set to the thesis's once those are known."""
+    tic = time.perf_counter()
+    fmap = orientation_reversing_map(ws.v, ws.f, ws.evals, ws.evecs, ws.area, ws.dense_desc)  # (k, k)
+    seconds = time.perf_counter() - tic
+    cand = Candidate("orientation", np.zeros((0, 2), np.int64), fmap, np.eye(ws.plan.n_eigen), True, ws.evecs @ fmap.T, ws.evecs, True, [])
+    return cand, seconds
+
+
+def extrinsic_candidate(
+    v: np.ndarray, evecs: np.ndarray, area: np.ndarray, pairs: np.ndarray, n_samples: int, seed: int
+) -> tuple[Candidate, float]:
+    """Step 10's hypothesis: each vertex of ``v (V, 3)`` to the vertex nearest its mirror image
+    in the best plane of at most ``n_samples`` vertices (seeded by ``seed``), and the plane's score."""
+    gen = torch.Generator().manual_seed(seed)
+    pts = torch.from_numpy(v)
+    if v.shape[0] > n_samples:
+        pts = pts[random_subset(v.shape[0], n_samples, gen)]
+    plane = detect_reflection_plane(pts, kernel={"enabled": False}, generator=gen)
+    nrm, off = plane.normal.numpy(), float(plane.offset)
+    mirrored = v - 2.0 * (v @ nrm + off)[:, None] * nrm  # (V, 3)
+    vmap = kdtree(v).query(mirrored, k=1, workers=-1)[1].astype(np.int64)
+    cand = Candidate(
+        "extrinsic", pairs, pointwise_to_functional(evecs, area, vmap), np.eye(evecs.shape[1]), True, v, mirrored, True, []
+    )
+    return cand, float(plane.score)

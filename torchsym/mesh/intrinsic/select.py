@@ -1,0 +1,136 @@
+"""Steps 9-10: choose a hypothesis on the vertex sample by tests of an isometric involution,
+and try the vertices' mirror plane when the chosen map is weak (extensions)."""
+
+from __future__ import annotations
+
+import logging
+import math
+from functools import partial
+
+import numpy as np
+import torch
+
+from torchsym.core import parallel
+from torchsym.mesh import fmaps
+from torchsym.mesh.intrinsic import hypotheses
+from torchsym.mesh.intrinsic.hypotheses import Candidate, first_image
+from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
+from torchsym.mesh.intrinsic.workspace import Workspace
+
+__all__ = ["EXTRINSIC_CLEARLY", "WEAK_DEFECT", "choose", "is_weak", "rank_choice", "refine_score", "screen", "try_extrinsic"]
+
+logger = logging.getLogger(__name__)
+
+#: a chosen map whose functional defect in k eigenfunctions exceeds this is weak (step 10)
+WEAK_DEFECT = 0.5
+#: the plane's refined map replaces a weak one when each test is at most this share of the weak map's
+EXTRINSIC_CLEARLY = 0.6
+
+
+def rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
+    """The row of ``table (H, T)`` with the smallest sum of ranks over the columns (ties: the earlier).
+
+    Rows holding ``inf`` rank last (all ``inf``: row 0). A winner other than row 0 must
+    also have a last column (the distortion) below ``max_distortion`` and row 0's.
+    """
+    n = table.shape[0]
+    ranks = np.zeros(n)
+    for col in table.T:
+        order = np.argsort(col, kind="stable")
+        ranks[order] += np.arange(n)
+    ranks[~np.isfinite(table).all(axis=1)] = np.inf
+    if not np.isfinite(ranks).any():
+        return 0
+    best = int(np.argmin(ranks))
+    distortion = table[:, -1]
+    return best if best == 0 or distortion[best] < min(max_distortion, distortion[0]) else 0
+
+
+def is_weak(row: np.ndarray) -> bool:
+    """Whether the chosen hypothesis's tests ``(width,)`` fail or its defect in ``k`` exceeds :data:`WEAK_DEFECT` (step 10 runs)."""
+    return not np.isfinite(row).all() or row[0] > WEAK_DEFECT
+
+
+def screen(ws: Workspace, seen: list[np.ndarray], cand: Candidate, image: np.ndarray | None = None) -> np.ndarray | None:
+    """The hypothesis's map on the sample ``(S,)``, or None when not worth refining (unusable,
+    a partial identity, or a duplicate of a map in ``seen``, which it joins)."""
+    image = first_image(ws, cand) if image is None else image
+    duplicate = any(np.array_equal(image, other) for other in seen)
+    seen.append(image)
+    cand.start = None if duplicate or not cand.usable else image
+    if not cand.usable or ws.probe.near_self(image) >= NEAR_SELF_LIMIT or duplicate:
+        return None
+    return image
+
+
+def refine_score(ws: Workspace, cand: Candidate, image: np.ndarray | None) -> np.ndarray:
+    """The hypothesis refined by ZoomOut on the sample and its tests ``(width,)``: functional
+    defects in ``k`` and ``refine.n_eigen`` eigenfunctions and the geodesic distortion (``inf``: failed)."""
+    plan = ws.plan
+    if image is None:
+        return np.full(plan.width, np.inf)
+    rows, area = ws.rows, ws.area
+    refined, fitted = fmaps.zoomout(ws.big, area, rows, image, plan.ks, ws.search, ws.settings.refine.involution)
+    if ws.probe.near_self(refined) >= NEAR_SELF_LIMIT:
+        # ZoomOut drifted to the identity, which every test scores as perfect
+        cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
+        return np.full(plan.width, np.inf)
+    cand.refined = fitted
+    c_k = fmaps.fit_functional(ws.evecs[rows], ws.evecs[refined], area[rows])
+    defects = [fmaps.involution_defect(c_k)]
+    if plan.refine_k > plan.n_eigen:  # else the same defect twice
+        k_r = plan.refine_k
+        defects.append(fmaps.involution_defect(fmaps.fit_functional(ws.big[rows, :k_r], ws.big[refined, :k_r], area[rows])))
+    return np.array([*defects, ws.probe.distortion(refined)])
+
+
+def choose(ws: Workspace, candidates: list[Candidate], images: list[np.ndarray], seen: list[np.ndarray]) -> tuple[np.ndarray, int]:
+    """Step 9: the tests ``(H, width)`` of every hypothesis and the row chosen (:func:`rank_choice`).
+
+    Screened in order (a duplicate of an earlier map is skipped), then refined on threads.
+    """
+    screened = [screen(ws, seen, cand, image) for cand, image in zip(candidates, images)]
+    scores = parallel.run_branches([partial(refine_score, ws, cand, image) for cand, image in zip(candidates, screened)])
+    table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
+    return table, rank_choice(table, ws.limit)
+
+
+def try_extrinsic(
+    ws: Workspace, candidates: list[Candidate], table: np.ndarray, best: int, seen: list[np.ndarray],
+    patch_share: float, gen: torch.Generator, notes: list[str],
+) -> tuple[np.ndarray, int, str | None]:
+    """Step 10: the mirror plane's map (:func:`~torchsym.mesh.intrinsic.hypotheses.extrinsic_candidate`),
+    refined and tested as in step 9, replaces the weak chosen map when it passes the tests and
+    the plane scores at least ``extrinsic.min_score`` (times one less ``patch_share``) or each
+    test is at most :data:`EXTRINSIC_CLEARLY` times the weak map's. Appends to ``candidates``.
+
+    Returns:
+        The tests, the chosen row and the note saying the plane's map was taken (else None).
+    """
+    ext = ws.settings.extrinsic
+    seed = (gen.initial_seed() + 1) % 2**64  # a seed of its own (initial_seed may be 2^64 - 1)
+    cand, plane_score = hypotheses.extrinsic_candidate(ws.v, ws.evecs, ws.area, candidates[0].pairs, ext.max_points, seed)
+    row = refine_score(ws, cand, screen(ws, seen, cand))
+    logger.debug("extrinsic plane: score %.3f, defects %s", plane_score, np.round(row, 4))
+    weak_row = np.array2string(table[best], precision=3)
+    # a vertex whose mirror falls in a covered hole has no partner: the limit drops by the patches' share
+    score_limit = ext.min_score * (1.0 - patch_share)
+    passes = bool(np.isfinite(row).all() and row[-1] < ws.limit)
+    clearly = bool(np.isfinite(table[best]).all() and (row <= EXTRINSIC_CLEARLY * table[best]).all())
+    if passes and (plane_score >= score_limit or clearly):
+        why = "" if plane_score >= score_limit else (
+            f", under {score_limit:.2f}, but each test of its refined map ({np.array2string(row, precision=3)}) is "
+            f"at most {EXTRINSIC_CLEARLY:g} times the intrinsic map's"
+        )
+        note = (
+            f"map from the extrinsic reflection plane of the vertices (symmetry score {plane_score:.2f}{why}): "
+            f"the intrinsic map was weak (defects {weak_row})"
+        )
+        candidates.append(cand)
+        return np.vstack([table, row]), len(candidates) - 1, note
+    notes.append(
+        f"the intrinsic map is weak (defects {weak_row}), and the extrinsic reflection plane of the "
+        f"vertices did not replace it (symmetry score {plane_score:.2f}, defects "
+        f"{np.array2string(row, precision=3)})"
+    )
+    return table, best, None

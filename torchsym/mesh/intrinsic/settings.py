@@ -1,0 +1,149 @@
+"""Settings of the intrinsic-symmetry method (thesis Ch. 6), one frozen dataclass with groups by stage."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+from torchsym.core.settings import Settings, group, setting
+
+__all__ = [
+    "Correction",
+    "Extrinsic",
+    "Features",
+    "Hypotheses",
+    "IntrinsicSymmetrySettings",
+    "Pairs",
+    "Polish",
+    "Realign",
+    "Refine",
+    "Select",
+    "Signs",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class Features(Settings):
+    """HKS feature points (step 3, Sec. 6.2.4)."""
+
+    n_times: int = setting(50, "HKS time scales h (thesis: 50)", low=1)
+    max_features: int = setting(25, "most feature points kept, strongest first (thesis: d <= 25)", low=2)
+    radius: float = setting(
+        0.15, "feature points this close (edge-graph distance) to a stronger one are dropped; 0 keeps all",
+        unit="x sqrt(area)", low=0.0,
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class Pairs(Settings):
+    """Sparse pairs of symmetric feature points (step 4, Eq. 6.1)."""
+
+    max_feature_pairs: int = setting(5, "most sparse pairs c", low=1)
+    max_cost: float = setting(0.5, "pairs with a larger affinity cost are not taken", low=0.0, low_open=True)
+    penalty: float = setting(1e6, "q of Sec. 6.2.4", low=0.0, low_open=True)
+    spectral_weight: float = setting(1.0, "weight of the phi^2 term of the affinity (0: HKS only)", low=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Signs(Settings):
+    """Signs of the eigenfunctions (step 5 and the sign hypotheses of step 7, Sec. 6.2.5)."""
+
+    cross_pairs: bool = setting(True, "also read signs from geodesics between two pairs")
+    min_confidence: float = setting(0.0, "eigenfunctions with weaker sign evidence are left out of C (0: thesis)", low=0.0)
+    n_uncertain: int = setting(3, "least-confident eigenfunctions whose both signs are tried (0: thesis)", low=0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Correction(Settings):
+    """Eigenfunction correction R on SO(k) (step 6, Eq. 6.4)."""
+
+    enabled: bool = setting(True, "run the correction")
+    mu: float = setting(0.01, "weight of the pairing term of Eq. 6.4 (unit-area eigenvalues / lambda_k)", low=0.0)
+    max_iters: int = setting(50, "trust-region iterations per correction", low=1)
+
+
+@dataclasses.dataclass(frozen=True)
+class Hypotheses(Settings):
+    """Hypotheses besides the thesis's pairs (steps 4 and 8, extensions)."""
+
+    hks_pairs: bool = setting(True, "also pair the feature points on HKS alone (spectral_weight 0)")
+    orientation: bool = setting(True, "also fit an orientation-reversing functional map to the dense HKS")
+
+
+@dataclasses.dataclass(frozen=True)
+class Extrinsic(Settings):
+    """The vertices' mirror plane as a hypothesis when the intrinsic ones are weak (step 10, an extension)."""
+
+    enabled: bool = setting(True, "try the plane's map when the chosen intrinsic map is weak")
+    min_score: float = setting(0.75, "least symmetry score of the plane for its map to be used", low=0.0, high=1.0)
+    max_points: int = setting(3000, "most vertices the plane is fitted to", low=10)
+
+
+@dataclasses.dataclass(frozen=True)
+class Select(Settings):
+    """Choice of a hypothesis on a vertex sample (step 9, an extension)."""
+
+    n_samples: int = setting(1000, "vertices on which the hypotheses are refined and compared (at least 4 x the basis)", low=50)
+    max_search_vertices: int = setting(
+        6000, "on larger meshes the sampled searches look among this many evenly spread vertices", low=50
+    )
+    max_distortion: float = setting(
+        0.12, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
+        low=0.0, low_open=True,
+    )
+    max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges", low=0.0, low_open=True)
+
+
+@dataclasses.dataclass(frozen=True)
+class Refine(Settings):
+    """ZoomOut refinement of the chosen map (step 11) and its orientation check (step 12), extensions."""
+
+    enabled: bool = setting(True, "refine by ZoomOut (False: the thesis's dense map)")
+    max_iters: int = setting(4, "ZoomOut rounds", low=1)
+    n_eigen: int = setting(25, "eigenfunctions of the last round (at least the top n_eigen)", low=1)
+    involution: bool = setting(True, "average each round's C with its inverse's and make it an orthogonal involution")
+    orientation_weight: float = setting(300.0, "weight of the orientation penalty of step 12 (0 skips the check)", low=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Polish(Settings):
+    """ZoomOut on into a larger basis after the choice (step 13, an extension)."""
+
+    enabled: bool = setting(True, "polish the map (skipped when n_eigen <= refine.n_eigen)")
+    max_iters: int = setting(3, "ZoomOut rounds", low=1)
+    n_eigen: int = setting(40, "eigenfunctions of the last round (also raises the eigenpairs of step 2)", low=1)
+
+
+@dataclasses.dataclass(frozen=True)
+class Realign(Settings):
+    """Realignment by distances to anchors (step 14, an extension)."""
+
+    enabled: bool = setting(True, "realign maps that reverse the orientation at under 90 % of the sample")
+    n_anchors: int = setting(64, "anchor vertices", low=1)
+    max_iters: int = setting(3, "realignment rounds", low=1)
+
+
+@dataclasses.dataclass(frozen=True)
+class IntrinsicSymmetrySettings(Settings):
+    """Settings of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry` (thesis Ch. 6).
+
+    Thesis values where it gives one (``k = 13``, ``h = 50``, ``d <= 25``, a large ``q``),
+    else chosen on a development split of FAUST/TOSCA. The thesis's method alone:
+    ``signs.n_uncertain = 0``, ``hypotheses.hks_pairs = hypotheses.orientation = False``,
+    ``extrinsic.enabled = refine.enabled = polish.enabled = realign.enabled = False``.
+    """
+
+    seed: int = setting(0, "seed of the generator of the Module form", low=0)
+    n_eigen: int = setting(13, "k, eigenfunctions of the thesis's map (thesis: 13)", low=3)
+    components: Literal["largest", "refuse"] = setting("largest", "keep the largest connected component, or refuse several")
+    fill_holes: bool = setting(True, "cover holes with new triangles before the spectrum")
+    features: Features = group(Features)
+    pairs: Pairs = group(Pairs)
+    signs: Signs = group(Signs)
+    correction: Correction = group(Correction)
+    hypotheses: Hypotheses = group(Hypotheses)
+    extrinsic: Extrinsic = group(Extrinsic)
+    select: Select = group(Select)
+    refine: Refine = group(Refine)
+    polish: Polish = group(Polish)
+    realign: Realign = group(Realign)

@@ -1,0 +1,271 @@
+"""The intrinsic-symmetry method (thesis Ch. 6) as one function of its steps, and its Module."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Mapping
+from functools import partial
+from typing import Any
+
+import numpy as np
+import torch
+from threadpoolctl import threadpool_limits
+
+from torchsym.core import parallel
+from torchsym.core.random import draw_seed, make_generator
+from torchsym.core.registry import register_solver
+from torchsym.core.results import on_input_device
+from torchsym.core.settings import Solver, resolve_settings
+from torchsym.geometry.mesh import Mesh
+from torchsym.mesh.intrinsic.hypotheses import (
+    HYPOTHESIS_TEXT,
+    Candidate,
+    first_image,
+    orientation_candidate,
+    pair_features,
+    pairing_candidates,
+)
+from torchsym.mesh.intrinsic.polish import polish
+from torchsym.mesh.intrinsic.probe import GeodesicProbe
+from torchsym.mesh.intrinsic.realign import realign
+from torchsym.mesh.intrinsic.refine import COARSE_EPS, finish_map, refined_map, thesis_map
+from torchsym.mesh.intrinsic.reorient import reorient
+from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
+from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
+from torchsym.mesh.intrinsic.select import choose, is_weak, try_extrinsic
+from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
+from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
+from torchsym.mesh.intrinsic.workspace import Plan, Surface, Workspace, plan_bases, prepare_surface, sample_notes
+from torchsym.mesh.nearest import SampledSearch
+
+__all__ = ["IntrinsicSymmetry", "intrinsic_symmetry"]
+
+logger = logging.getLogger(__name__)
+
+
+@on_input_device
+@threadpool_limits.wrap(limits=1, user_api="blas")  # the searches run on every core instead
+def intrinsic_symmetry(
+    mesh: Mesh,
+    settings: IntrinsicSymmetrySettings | Mapping[str, Any] | None = None,
+    *,
+    generator: torch.Generator | None = None,
+    **overrides: Any,
+) -> IntrinsicSymmetryResult:
+    """The intrinsically symmetric vertex of every vertex of ``mesh`` (thesis Sec. 6.2).
+
+    1. Validate, keep the largest component, cover holes, scale to unit area.
+    2. The smallest eigenpairs of the cotangent Laplacian (Sec. 6.2.3).
+    3. HKS feature points (Sec. 6.2.4).
+    4. Sparse symmetric pairs of them by Eq. 6.1 (also on HKS alone: ``hypotheses.hks_pairs``).
+    5. Signs of the eigenfunctions from geodesics between pairs, ``C = diag(s)`` (Sec. 6.2.5).
+    6. The correction ``R`` on SO(k) of Eq. 6.4 (Sec. 6.2.6).
+    7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
+    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
+    9. Choice of a hypothesis by ZoomOut and tests of an isometric involution on a vertex sample.
+    10. The vertices' mirror plane when the chosen map is weak (``extrinsic``).
+    11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
+    12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
+    13. ZoomOut on to ``polish.n_eigen`` eigenfunctions (``polish``).
+    14. Realignment by distances to anchors (``realign``).
+
+    Steps 4 and 8-14 go beyond the thesis (``docs/design/intrinsic.md``); the thesis's method
+    alone is described in :class:`IntrinsicSymmetrySettings`.
+
+    Args:
+        mesh: the input :class:`~torchsym.geometry.mesh.Mesh` (any pose, may have holes).
+        settings: :class:`IntrinsicSymmetrySettings`, a mapping as in YAML, or None (defaults).
+        generator: the source of randomness; None seeds one with ``settings.seed``.
+        **overrides: settings to change, dotted for groups (``**{"refine.n_eigen": 30}``) or
+            groups as mappings (``refine={"n_eigen": 30}``).
+
+    Returns:
+        An :class:`IntrinsicSymmetryResult`; the same seed gives the same bits.
+
+    Raises:
+        ConfigError: a bad setting.
+        InputValueError: a broken mesh (:func:`~torchsym.mesh.validate_mesh`).
+        InputShapeError: not a mesh, or fewer than ``n_eigen + 1`` vertices.
+        SolverError: the eigensolver or the pairing program failed.
+    """
+    settings = resolve_settings(IntrinsicSymmetrySettings, settings, overrides)
+    gen = generator if generator is not None else make_generator(settings.seed)
+    timings: dict[str, float] = {}
+    notes: list[str] = []
+    t_start = tic = time.perf_counter()
+
+    surface = prepare_surface(mesh, settings, notes)  # step 1
+    timings["validate"] = time.perf_counter() - tic
+    plan = plan_bases(surface.n, settings, notes)
+    spectrum = compute_spectrum(surface.v, surface.f, plan, settings, gen)  # step 2
+    timings["eigen"] = spectrum.t_eigen
+    features = feature_points(spectrum, settings)  # step 3
+    timings["features"] = spectrum.t_topology + features.seconds
+
+    tic = time.perf_counter()
+    pair_sets, pair_notes = pair_features(spectrum.graph, features.points, features.desc, spectrum.evecs, plan.weights, settings)  # step 4
+    sign_draws, seed = _draw_seeds(surface, spectrum, pair_sets, settings, gen)
+    for key in ("signs", "correction", "map"):
+        timings[key] = 0.0
+    timings["pairs"], tic = time.perf_counter() - tic, time.perf_counter()
+
+    notes.extend(sample_notes(plan, surface.n, settings))
+    ws, t_sample = _workspace(surface, spectrum, features.dense_desc, plan, settings, seed)
+    timings["select"] = t_sample + time.perf_counter() - tic
+    candidates, images = _hypotheses(ws, pair_sets, pair_notes, sign_draws, timings)  # steps 5-8
+
+    tic = time.perf_counter()
+    seen: list[np.ndarray] = []
+    table, best = choose(ws, candidates, images, seen)  # step 9
+    timings["select"] += time.perf_counter() - tic
+    extrinsic_note = None
+    if settings.extrinsic.enabled and is_weak(table[best]):
+        tic = time.perf_counter()
+        table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
+        timings["extrinsic"] = time.perf_counter() - tic
+    chosen = candidates[best]
+    _choice_notes(candidates, table, best, extrinsic_note, notes)
+
+    state = refined_map(ws, chosen, timings)  # step 11
+    reorient(ws, chosen, candidates, state, notes, timings)  # step 12
+    improvable = chosen.refined is not None or state.rescued
+    if plan.polish and improvable:
+        polish(ws, state, notes, timings)  # step 13
+    if plan.realign and state.full.shape[0] and improvable:
+        if ws.wound:
+            realign(ws, state, notes, timings)  # step 14
+        else:
+            notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
+    if not np.isfinite(table[best]).all() and chosen.usable and not state.rescued:
+        notes.append(
+            "no hypothesis passed the tests of an isometric involution (each left most of the shape "
+            "in place, or distorted geodesics by more than the limit): the thesis's map is "
+            "returned unrefined and is unreliable"
+        )
+    finish_map(ws, state, timings)
+    timings["total"] = time.perf_counter() - t_start
+    return _result(surface, spectrum, features.points, chosen, state, timings, notes)
+
+
+def _draw_seeds(surface: Surface, spectrum: Spectrum, pair_sets: list, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> tuple:
+    """The generator's draws in the serial order: each pairing's sign sample (step 7), then step 9's seed."""
+    n_uncertain, max_search = settings.signs.n_uncertain, settings.select.max_search_vertices
+    sign_seeds = [draw_seed(gen) if n_uncertain and pairs.shape[0] else None for pairs in pair_sets]
+    sign_draws = [
+        None if s is None else spectrum.sign_samples.get(s) or sign_sample(surface.n, np.random.default_rng(s), surface.v, max_search)
+        for s in sign_seeds
+    ]
+    return sign_draws, draw_seed(gen)
+
+
+def _workspace(surface: Surface, spectrum: Spectrum, dense_desc: np.ndarray, plan: Plan, settings: IntrinsicSymmetrySettings, seed: int) -> tuple[Workspace, float]:
+    """The workspace of steps 5-14 on step 9's sample drawn from ``seed`` (drawn ahead when guessed right), and the sample's seconds."""
+    sample = next((s for s in spectrum.samples if s.seed == seed), None) or draw_sample(
+        seed, surface.v, surface.f, plan.n_rows, settings.select.max_search_vertices, plan.n_targets, spectrum.two_ring, spectrum.frames
+    )
+    ws = Workspace(
+        settings, plan, surface.v, surface.f, spectrum.evals, spectrum.evecs, spectrum.big_evals, spectrum.big, spectrum.area,
+        spectrum.graph, spectrum.two_ring, dense_desc, spectrum.has_boundary, spectrum.wound,
+        sample.rows, sample.rng, sample.orient, SampledSearch(spectrum.big, sample.targets),
+    )
+    return ws, sample.seconds
+
+
+def _probe_and_searches(ws: Workspace) -> tuple[GeodesicProbe, float]:
+    """Step 9's geodesic probe (drawn from the sample's generator) and the sampled searches of steps 11 and 13, built before threads share them."""
+    tic = time.perf_counter()
+    probe = GeodesicProbe(ws.graph, ws.rows, ws.rng)
+    for kk in (*ws.plan.ks, *ws.plan.schedule):
+        ws.search.sample(kk)
+    if ws.plan.polish:
+        ws.search.dense(ws.plan.polish_k)
+    return probe, time.perf_counter() - tic
+
+
+def _orientation_branch(ws: Workspace) -> tuple:
+    cand, t_fmap = orientation_candidate(ws)  # step 8
+    probe, t_probe = _probe_and_searches(ws)
+    tic = time.perf_counter()
+    image = first_image(ws, cand)
+    return cand, t_fmap, probe, t_probe + time.perf_counter() - tic, image
+
+
+def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list, timings: dict[str, float]) -> tuple:
+    """Steps 5-8: the pairings' hypotheses beside the orientation hypothesis (with step 9's probe), on two threads."""
+    pairings = partial(pairing_candidates, ws, pair_sets, pair_notes, sign_draws, timings)
+    if ws.settings.hypotheses.orientation:
+        (candidates, images), (cand, timings["orientation"], probe, t_probe, image) = parallel.run_branches(
+            [pairings, partial(_orientation_branch, ws)]
+        )
+        cand.pairs = candidates[0].pairs
+        candidates.append(cand)
+        images.append(image)
+    else:
+        (candidates, images), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
+    ws.probe = probe
+    timings["select"] += t_probe
+    return candidates, images
+
+
+def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, extrinsic_note: str | None, notes: list[str]) -> None:
+    chosen = candidates[best]
+    for cand, row in zip(candidates, table):
+        logger.debug("hypothesis %s: defects %s", cand.name, np.round(row, 4))
+    notes.extend(chosen.notes)
+    if extrinsic_note is not None:
+        notes.append(extrinsic_note)
+    elif best != 0:
+        notes.append(
+            f"map from the {HYPOTHESIS_TEXT[chosen.name]}: ranked first on the tests of an isometric involution "
+            f"(defects {np.array2string(table[best], precision=3)} against {np.array2string(table[0], precision=3)} "
+            f"for the thesis's pairs)"
+        )
+
+
+def _deferred_thesis_map(checked, chosen: Candidate) -> torch.Tensor:
+    return checked.map_to_input(torch.from_numpy(thesis_map(chosen, COARSE_EPS)[0]))
+
+
+def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, timings, notes) -> IntrinsicSymmetryResult:
+    checked = surface.checked
+    to_input = checked.vertex_index.numpy()
+    refined = state.step11 is not None
+    return IntrinsicSymmetryResult(
+        map=checked.map_to_input(torch.from_numpy(state.vmap)),
+        functional_map=torch.from_numpy(np.ascontiguousarray(chosen.fmap)),
+        rotation=torch.from_numpy(chosen.rotation),
+        map_before_refine=(
+            Deferred(partial(_deferred_thesis_map, checked, chosen)) if refined
+            else checked.map_to_input(torch.from_numpy(state.coarse))
+        ),
+        refined_functional_map=torch.from_numpy(np.ascontiguousarray(state.full)),
+        eigenvalues=torch.from_numpy(spectrum.evals),
+        pairs=torch.from_numpy(to_input[chosen.pairs]),
+        feature_points=torch.from_numpy(to_input[features]),
+        timings=timings,
+        num_components=checked.num_components,
+        dropped_vertices=checked.dropped_vertices,
+        correction_converged=bool(chosen.converged),
+        hypothesis=chosen.name,
+        holes_closed=surface.holes_closed,
+        notes=tuple(notes),
+    )
+
+
+@register_solver("intrinsic_symmetry", kind="mesh", default=True)
+class IntrinsicSymmetry(Solver):
+    """Intrinsic reflection symmetry of a triangle mesh by functional maps (thesis Ch. 6).
+
+    Module form of :func:`intrinsic_symmetry`, settings :class:`IntrinsicSymmetrySettings`.
+
+    Example:
+        >>> solver = IntrinsicSymmetry(n_eigen=13, seed=0)
+        >>> result = solver(mesh)  # doctest: +SKIP
+    """
+
+    settings_class = IntrinsicSymmetrySettings
+
+    def forward(self, mesh: Mesh, generator: torch.Generator | None = None) -> IntrinsicSymmetryResult:
+        gen = generator if generator is not None else make_generator(self.settings.seed)
+        return intrinsic_symmetry(mesh, self.settings, generator=gen)
