@@ -47,6 +47,8 @@ MAX_PIXELS = 50_000_000
 
 def _existing(path: str | Path, name: str) -> Path:
     p = Path(path)
+    if p.is_symlink() and not p.exists():
+        raise InputFileError(f"{name}: {str(p)!r} is a symbolic link to nothing (a loop or a missing target)")
     if not p.exists():
         raise InputFileError(f"{name}: file {str(p)!r} does not exist")
     if not p.is_file():
