@@ -97,8 +97,16 @@ def _read_text_rows(p: Path, max_points: int) -> np.ndarray:
     separator ending every row is allowed), ``#`` and ``//`` start comments, a UTF-8
     byte-order mark is skipped, and a first row of column names (``X,Y,Z``; no field a
     number) or of the point count alone (Leica ``.pts``) is skipped as a header. Empty
-    fields and later non-numeric rows are errors, never silently dropped.
+    fields and later non-numeric rows are errors, never silently dropped. More than
+    ``max_points`` lines are refused before any is parsed.
     """
+    try:
+        with open(p, "rb") as fh:
+            n_lines = sum(chunk.count(b"\n") for chunk in iter(lambda: fh.read(1 << 24), b""))
+    except OSError as exc:
+        raise InputFileError(f"path: cannot read {str(p)!r} ({exc.strerror or exc})") from None
+    if n_lines > max_points + 1:
+        raise InputFileError(f"path: {str(p)!r} holds {n_lines} lines, more than max_points={max_points} points")
     try:
         with open(p, encoding="utf-8-sig") as fh:
             head: list[str] = []
