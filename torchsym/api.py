@@ -11,7 +11,7 @@ import torch
 from torchsym.core.checks import as_tensor, check_dense, check_finite, check_scale
 from torchsym.core.config import PipelineConfig, build_pipeline, default_config, load_config
 from torchsym.core.results import Result
-from torchsym.errors import ConfigError, InputValueError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.io.read import infer_kind, load_input
 
 KINDS = ("pointcloud", "points", "image", "mesh")
@@ -79,6 +79,10 @@ def detect(
         **overrides: settings of the pipeline's last solver, checked against its
             signature (e.g. ``n_init_samples=800``).
 
+    Raises:
+        TorchsymError: a bad input, config or setting; a solver's refusal of a file's
+            contents names the file.
+
     Returns:
         The solver's typed result (e.g. :class:`torchsym.ReflectionPlaneResult`).
 
@@ -90,4 +94,9 @@ def detect(
     """
     _, data, cfg = prepare(input, config, kind=kind)
     pipeline = build_pipeline(cfg, **overrides)
-    return pipeline(data)
+    if not isinstance(input, (str, Path)):
+        return pipeline(data)
+    try:
+        return pipeline(data)
+    except (InputShapeError, InputValueError) as exc:  # say which file the solver refused
+        raise type(exc)(f"input {str(input)!r}: {exc}") from None
