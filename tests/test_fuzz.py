@@ -336,16 +336,24 @@ def test_cli_in_process(fuzz_dir, file):
 
 
 @pytest.mark.slow
-@_fuzz(2)
-@given(suffix=st.sampled_from([".off", ".obj", ".ply", ".npy", ".png"]), data=st.binary(max_size=200))
-def test_cli_subprocess(fuzz_dir, suffix, data):
-    """``python -m torchsym detect`` on junk: exit code 2, one line, no traceback."""
-    path = fuzz_dir / f"cli{suffix}"
-    path.write_bytes(data)
+@_fuzz(1)
+@given(st.lists(st.tuples(st.sampled_from([".off", ".obj", ".ply", ".npy", ".png"]), st.binary(min_size=1, max_size=200)),
+                min_size=3, max_size=3))
+def test_cli_subprocess(fuzz_dir, files):
+    """``python -m torchsym detect FOLDER`` over junk files (one process, its start-up is slow):
+    exit code 2, one error line per file and a summary, no traceback, files unchanged."""
+    folder = fuzz_dir / "cli_folder"
+    folder.mkdir(exist_ok=True)
+    for q in folder.iterdir():
+        q.unlink()
+    paths = [folder / f"junk{i}{suffix}" for i, (suffix, _) in enumerate(files)]
+    for path, (_, data) in zip(paths, files):
+        path.write_bytes(data)
     env = {**os.environ, "PYTHONPATH": str(Path(torchsym.__file__).parents[1])}
-    out = subprocess.run([sys.executable, "-m", "torchsym", "detect", str(path), "--out", str(fuzz_dir / "out")],
-                         capture_output=True, text=True, env=env, timeout=120)
+    out = subprocess.run([sys.executable, "-m", "torchsym", "detect", str(folder), "--out", str(fuzz_dir / "out")],
+                         capture_output=True, text=True, env=env, timeout=300)
     lines = [line for line in out.stderr.splitlines() if line.strip()]
-    assert out.returncode == 2, out.stderr
-    assert len(lines) == 1 and lines[0].startswith("torchsym: error: ") and str(path) in lines[0], out.stderr
-    assert "Traceback" not in out.stderr and path.read_bytes() == data
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert len(lines) == 4 and all(line.startswith("torchsym: error: ") for line in lines), out.stderr
+    assert all(str(p) in line for p, line in zip(paths, lines)) and "3 of 3 inputs failed" in lines[3]
+    assert [p.read_bytes() for p in paths] == [data for _, data in files]
