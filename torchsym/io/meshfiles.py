@@ -123,12 +123,9 @@ def _triangles(faces: np.ndarray, n_vertices: int, where: str) -> np.ndarray:
 
 def _data_lines(text: str) -> list[list[str]]:
     """Token lists of the non-empty lines, ``#`` comments removed."""
-    rows = []
-    for line in text.splitlines():
-        tokens = line.split("#", 1)[0].split()
-        if tokens:
-            rows.append(tokens)
-    return rows
+    if "#" in text:
+        text = re.sub(r"#[^\n]*", "", text)
+    return [tokens for tokens in map(str.split, text.splitlines()) if tokens]
 
 
 def _parse_off(data: bytes, max_points: int) -> tuple[np.ndarray, np.ndarray]:
