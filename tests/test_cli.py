@@ -1,6 +1,10 @@
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 import torchsym
 from torchsym.cli import main
@@ -54,11 +58,12 @@ class TestCLI:
         before = (tmp_path / "chair_plane.ply").read_bytes()
         code = main(["detect", str(tmp_path), "--out", str(tmp_path), "-q"])
         err = capsys.readouterr().err
-        assert code == 1 and "would overwrite the input" in err and "chair_plane.ply" in err
+        assert code == 2 and "would overwrite the input" in err and "chair_plane.ply" in err
         assert (tmp_path / "chair_plane.ply").read_bytes() == before
         assert not (tmp_path / "chair.json").exists()  # nothing of the refused input was written
         assert (tmp_path / "chair_plane.json").is_file() and (tmp_path / "chair_plane_plane.ply").is_file()
-        assert not [q for q in tmp_path.iterdir() if q.name.startswith(".")]  # staging folders removed
+        hidden = [q.name for q in tmp_path.iterdir() if q.name.startswith(".")]
+        assert hidden == [".torchsym-outputs.json"]  # staging folders removed, the manifest kept
 
     def test_inputs_sharing_a_stem_keep_their_own_results(self, tmp_path, capsys):
         import shutil
@@ -73,7 +78,7 @@ class TestCLI:
         np.savetxt(tmp_path / "a" / "chair.xyz", torchsym.data.sample_pointcloud().numpy())
         out = tmp_path / "out"
         assert main(["detect", str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(out), "-q", "--no-figures"]) == 0
-        names = sorted(q.name for q in out.iterdir())
+        names = sorted(q.name for q in out.iterdir() if not q.name.startswith("."))
         assert names == ["chair_ply.json", "chair_ply_2.json", "chair_xyz.json"]
         inputs = {json.loads((out / n).read_text())["input"] for n in names}
         assert len(inputs) == 3
@@ -86,3 +91,90 @@ class TestCLI:
         names = ["a/chair.xyz", "a/chair.npy", "b/chair.xyz", "a/chair_xyz.txt", "a/chair_xyz_2.pts", "a/table.ply"]
         stems = _unique_stems([Path(n) for n in names])
         assert len(set(stems)) == len(stems) and stems[-1] == "table" and stems[3:5] == ["chair_xyz", "chair_xyz_2"]
+
+
+def _small_cloud(path, n=300):
+    pts = torchsym.data.sample_pointcloud()[:: 4000 // n].numpy()
+    import numpy as np
+
+    np.savetxt(path, pts)
+    return path
+
+
+def _one_error_line(err: str) -> str:
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("torchsym: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+class TestCLIFiles:
+    def test_config_is_never_overwritten(self, tmp_path, capsys):
+        scan = _small_cloud(tmp_path / "scan.xyz")
+        cfg = tmp_path / "scan.json"
+        cfg.write_text(json.dumps({"input": "pointcloud", "steps": [{"name": "reflection_plane"}]}))
+        before = cfg.read_bytes()
+        code = main(["detect", str(scan), "--config", str(cfg), "--out", str(tmp_path), "-q", "--no-figures"])
+        line = _one_error_line(capsys.readouterr().err)
+        assert code == 2 and "would overwrite the input" in line and "scan.json" in line
+        assert cfg.read_bytes() == before
+
+    def test_second_run_over_its_own_outputs(self, tmp_path, capsys):
+        _small_cloud(tmp_path / "scan.xyz")
+        for _ in range(2):
+            assert main(["detect", str(tmp_path), "--out", str(tmp_path), "-q"]) == 0
+            out = capsys.readouterr().out
+            assert out.startswith("scan: ") and "scan_plane" not in out.split("\n")[0]  # one input, read alone
+        manifest = json.loads((tmp_path / ".torchsym-outputs.json").read_text())
+        assert "scan.json" in manifest["outputs"] and "scan_plane.ply" in manifest["outputs"]
+        assert json.loads((tmp_path / "scan.json").read_text())["result"]["type"] == "ReflectionPlaneResult"
+
+    def test_empty_out_refused(self, tmp_path, capsys, monkeypatch):
+        monkeypatch.chdir(tmp_path)
+        scan = _small_cloud(tmp_path / "scan.xyz")
+        assert main(["detect", str(scan), "--out", "", "-q"]) == 2
+        assert "--out: expected a folder" in _one_error_line(capsys.readouterr().err)
+        assert sorted(q.name for q in tmp_path.iterdir()) == ["scan.xyz"]
+
+    def test_empty_input_refused(self, capsys):
+        assert main(["detect", "", "-q"]) == 2
+        assert "INPUT: expected a file or folder" in _one_error_line(capsys.readouterr().err)
+
+    @pytest.mark.parametrize("value", [
+        "!!python/object/apply:os.system [echo hi]",  # ConstructorError
+        "[1, 2",  # ParserError
+        "{a: 1}\n--- b",  # ComposerError (two documents)
+        "&a [1, *a]",  # an alias
+        "[[[[[[[[[[1]]]]]]]]]]",  # nested past 8
+    ])
+    def test_set_bad_yaml(self, tmp_path, capsys, value):
+        scan = _small_cloud(tmp_path / "scan.xyz")
+        assert main(["detect", str(scan), "--out", str(tmp_path / "o"), "--set", f"n_starts={value}"]) == 2
+        line = _one_error_line(capsys.readouterr().err)
+        assert "--set: n_starts=" in line
+        assert not (tmp_path / "o" / "scan.json").exists()
+
+    def test_symlink_loop(self, tmp_path, capsys):
+        loop = tmp_path / "loop.xyz"
+        loop.symlink_to(loop)
+        assert main(["detect", str(loop), "--out", str(tmp_path / "o"), "-q"]) == 2
+        line = _one_error_line(capsys.readouterr().err)
+        assert "loop.xyz" in line and "symbolic link" in line
+
+    def test_folder_run_goes_on_past_a_bad_file(self, tmp_path, capsys):
+        d = tmp_path / "d"
+        d.mkdir()
+        (d / "a_empty.npy").write_bytes(b"")
+        _small_cloud(d / "b.xyz")
+        assert main(["detect", str(d), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 2
+        err = capsys.readouterr().err
+        assert "a_empty.npy" in err and "cannot read" in err and "1 of 2 inputs failed" in err
+        assert json.loads((tmp_path / "o" / "b.json").read_text())["result"]["type"] == "ReflectionPlaneResult"
+
+    @pytest.mark.parametrize("argv", [["detect", "missing.xyz"], ["detect"], ["detect", "x.xyz", "--kind", "bogus"], ["nope"]])
+    def test_errors_are_one_line(self, tmp_path, argv):
+        env = {**os.environ, "PYTHONPATH": str(Path(torchsym.__file__).parents[1])}
+        out = subprocess.run([sys.executable, "-m", "torchsym", *argv], capture_output=True, text=True, cwd=tmp_path, env=env)
+        assert out.returncode == 2
+        _one_error_line(out.stderr)
+        assert not [q for q in tmp_path.iterdir() if q.name != "torchsym-out"]

@@ -6,12 +6,15 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
+import torch
 
-from torchsym.core.checks import as_tensor
+from torchsym.core.checks import as_tensor, check_dense, check_finite, check_scale
 from torchsym.core.config import PipelineConfig, build_pipeline, default_config, load_config
 from torchsym.core.results import Result
-from torchsym.errors import ConfigError
+from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.io.read import infer_kind, load_input
+
+KINDS = ("pointcloud", "points", "image", "mesh")
 
 __all__ = ["detect", "prepare"]
 
@@ -22,8 +25,11 @@ def prepare(
     """Load ``input`` if it is a path, tell its kind and choose the config.
 
     Returns ``(kind, data, config)``: the config is the one given, or the default
-    pipeline for the input's kind.
+    pipeline for the input's kind. Tensors and arrays are checked here (dense, real,
+    finite, no stray coordinate) and detached: ``detect`` does not carry gradients.
     """
+    if kind is not None and kind not in KINDS:
+        raise InputValueError(f"kind: expected one of {', '.join(KINDS)} or None, got {kind!r}")
     cfg = None
     if config is not None:
         cfg = config if isinstance(config, PipelineConfig) else load_config(config)
@@ -31,13 +37,26 @@ def prepare(
     if isinstance(input, (str, Path)):
         found, data = load_input(input, kind=want)
     else:
-        data = as_tensor(input, "input") if isinstance(input, np.ndarray) else input
+        data = _in_memory(input)
         found = infer_kind(data)
+        if found in ("pointcloud", "points"):
+            check_scale(check_finite(as_tensor(data, "input"), "input"), "input")
     if cfg is None:
         cfg = default_config(kind or found)
     elif found != cfg.input and not (found == "pointcloud" and cfg.input == "points"):
         raise ConfigError(f"config: pipeline {cfg.source!r} takes {cfg.input!r} input, but the input is a {found}")
     return found, data, cfg
+
+
+def _in_memory(x: Any) -> Any:
+    """A tensor or array input as a dense, detached tensor of its own dtype (uint8 images
+    stay uint8, so the image check scales them); other inputs unchanged."""
+    if isinstance(x, np.ndarray):
+        t = as_tensor(x, "input")
+        return torch.from_numpy(np.ascontiguousarray(x)) if x.dtype in (np.uint8, np.uint16) else t
+    if isinstance(x, torch.Tensor):
+        return check_dense(x, "input").detach()
+    return x
 
 
 def detect(
@@ -60,6 +79,10 @@ def detect(
         **overrides: settings of the pipeline's last solver, checked against its
             signature (e.g. ``n_init_samples=800``).
 
+    Raises:
+        TorchsymError: a bad input, config or setting; a solver's refusal of a file's
+            contents names the file.
+
     Returns:
         The solver's typed result (e.g. :class:`torchsym.ReflectionPlaneResult`).
 
@@ -71,4 +94,9 @@ def detect(
     """
     _, data, cfg = prepare(input, config, kind=kind)
     pipeline = build_pipeline(cfg, **overrides)
-    return pipeline(data)
+    if not isinstance(input, (str, Path)):
+        return pipeline(data)
+    try:
+        return pipeline(data)
+    except (InputShapeError, InputValueError) as exc:  # say which file the solver refused
+        raise type(exc)(f"input {str(input)!r}: {exc}") from None

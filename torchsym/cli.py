@@ -13,7 +13,7 @@ import logging
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, NoReturn, Sequence
 
 import yaml
 
@@ -25,26 +25,86 @@ _INPUTS_HELP = (
 )
 
 
+#: the file in an output folder listing what torchsym wrote there; a folder given as input
+#: skips the files it names, so a second run over its own output folder reads the same inputs
+MANIFEST = ".torchsym-outputs.json"
+
+
+def _fail(message: str) -> None:
+    """Print ``torchsym: error: message`` as one line on stderr."""
+    print("torchsym: error: " + " ".join(str(message).splitlines()), file=sys.stderr)
+
+
+def _yaml_value(key: str, text: str) -> Any:
+    """``text`` read as one plain YAML value: no anchors or aliases, nesting at most 8 deep."""
+    from torchsym.errors import ConfigError
+
+    where = f"--set: {key}={text!r}"
+    try:
+        depth = 0
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+                raise ConfigError(f"{where}: expected a plain value, got a YAML anchor or alias")
+            depth += isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent))
+            depth -= isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent))
+            if depth > 8:
+                raise ConfigError(f"{where}: expected a value nested at most 8 deep")
+        return yaml.safe_load(text)
+    except (yaml.YAMLError, RecursionError) as exc:
+        problem = " ".join(str(exc).split()) or type(exc).__name__
+        raise ConfigError(f"{where} is not a valid YAML value ({problem})") from None
+
+
 def _parse_set(items: Sequence[str]) -> dict[str, Any]:
+    from torchsym.errors import ConfigError
+
     out: dict[str, Any] = {}
     for item in items:
-        if "=" not in item:
-            raise SystemExit(f"torchsym: --set expects KEY=VALUE, got {item!r}")
-        key, value = item.split("=", 1)
-        out[key.strip()] = yaml.safe_load(value)
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise ConfigError(f"--set: expected KEY=VALUE, got {item!r}")
+        out[key.strip()] = _yaml_value(key.strip(), value)
     return out
 
 
+def _resolve(p: Path) -> Path:
+    """``p`` resolved, or made absolute where it cannot be (a symlink loop)."""
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):
+        return p.absolute()
+
+
+def _own_outputs(folder: Path) -> set[str]:
+    """Names that earlier runs wrote into ``folder`` (its manifest; none if unreadable)."""
+    try:
+        names = json.loads((folder / MANIFEST).read_text()).get("outputs", [])
+    except (OSError, ValueError, AttributeError):
+        return set()
+    return {n for n in names if isinstance(n, str)}
+
+
 def _expand(inputs: Sequence[str]) -> list[Path]:
+    """Files of ``inputs``: files as given, folders' files with a known suffix, except
+    hidden files and the outputs a torchsym run wrote there (:data:`MANIFEST`)."""
+    from torchsym.errors import InputFileError
     from torchsym.io.read import IMAGE_SUFFIXES, POINT_SUFFIXES
 
     paths: list[Path] = []
     for item in inputs:
+        if not item.strip():
+            raise InputFileError("INPUT: expected a file or folder, got ''")
         p = Path(item)
-        if p.is_dir():
-            paths += sorted(q for q in p.iterdir() if q.suffix.lower() in IMAGE_SUFFIXES + POINT_SUFFIXES)
-        else:
+        if not p.is_dir():
             paths.append(p)
+            continue
+        skip = _own_outputs(p)
+        try:
+            found = sorted(q for q in p.iterdir() if q.suffix.lower() in IMAGE_SUFFIXES + POINT_SUFFIXES
+                           and not q.name.startswith(".") and q.name not in skip)
+        except OSError as exc:
+            raise InputFileError(f"INPUT: cannot list the folder '{p}' ({exc.strerror or exc})") from None
+        paths += found
     return paths
 
 
@@ -87,6 +147,15 @@ def _summary(result: Any) -> str:
     return f"{d['type']}: " + ", ".join(parts)
 
 
+def _out_dir(text: str) -> Path:
+    """The ``--out`` folder; an empty name (which would mean the current folder) is refused."""
+    from torchsym.errors import InputFileError
+
+    if not text.strip():
+        raise InputFileError(f"--out: expected a folder, got {text!r}")
+    return Path(text)
+
+
 def _make_out(out: Path) -> None:
     from torchsym.errors import InputFileError
 
@@ -118,6 +187,7 @@ def _write_outputs(
     import tempfile
 
     from torchsym.errors import InputFileError, TorchsymError
+    from torchsym.io.write import write_json
 
     _make_out(out)
     try:
@@ -129,7 +199,7 @@ def _write_outputs(
 
         names = [Path(q).name for q in write_artifacts(result, data, staging, stem)] if figures else []
         record["artifacts"] = [str(out / name) for name in names]
-        (staging / f"{stem}.json").write_text(json.dumps(record, indent=2))
+        write_json(record, staging / f"{stem}.json")
         names.insert(0, f"{stem}.json")
         clash = [name for name in names if (out / name).resolve() in protected]
         if clash:
@@ -146,6 +216,7 @@ def _write_outputs(
         for name in names:
             (staging / name).replace(out / name)
             written.add((out / name).resolve())
+        _record_outputs(out, names)
     except TorchsymError:
         raise
     except OSError as exc:
@@ -153,6 +224,13 @@ def _write_outputs(
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return [str(out / name) for name in names]
+
+
+def _record_outputs(out: Path, names: Sequence[str]) -> None:
+    """Add ``names`` to the manifest of ``out`` (see :data:`MANIFEST`)."""
+    from torchsym.io.write import write_json
+
+    write_json({"outputs": sorted(_own_outputs(out) | set(names))}, out / MANIFEST)
 
 
 def _run_one(
@@ -191,7 +269,7 @@ def _run_one(
     paths_out: list[str] = []
     if args.out is not None:
         paths_out = _write_outputs(
-            result, data, record, Path(args.out), stem, not args.no_figures, protected, set() if written is None else written
+            result, data, record, _out_dir(args.out), stem, not args.no_figures, protected, set() if written is None else written
         )
     if bar is not None:
         bar.update(1)
@@ -203,26 +281,25 @@ def _run_one(
 
 
 def _cmd_detect(args: argparse.Namespace) -> int:
+    """Run every input; a failing input is reported on one line and the run goes on.
+    Exit code 0 when all succeed, 2 when any failed."""
     from tqdm import tqdm
 
     from torchsym.errors import TorchsymError
 
     overrides = _parse_set(args.set or [])
+    _make_out(_out_dir(args.out))
     paths = _expand(args.inputs)
     if not paths:
-        print("torchsym detect: no inputs found", file=sys.stderr)
+        _fail("detect: no inputs found (folders are searched for " + _INPUTS_HELP.split(", or")[0] + ")")
         return 2
-    protected = frozenset(p.resolve() for p in paths)
+    # never written: the inputs and the config file
+    protected = frozenset([_resolve(p) for p in paths] + ([_resolve(Path(args.config))] if args.config else []))
     stems = _unique_stems(paths)
     written: set[Path] = set()
-    try:
-        _make_out(Path(args.out))
-    except TorchsymError as exc:
-        print(f"torchsym detect: {exc}", file=sys.stderr)
-        return 2
     failures = 0
     # three steps per input (read, solve, write), so a single input shows its stages too
-    with tqdm(total=3 * len(paths), unit="step", disable=args.quiet, file=sys.stderr, leave=False) as bar:
+    with tqdm(total=3 * len(paths), unit="step", disable=True if args.quiet else None, file=sys.stderr, leave=False) as bar:
         for p, stem in zip(paths, stems):
             done = bar.n
             try:
@@ -230,11 +307,17 @@ def _cmd_detect(args: argparse.Namespace) -> int:
             except TorchsymError as exc:
                 failures += 1
                 bar.clear()
-                print(f"torchsym detect: {p}: {exc}", file=sys.stderr)
-                if len(paths) == 1:
-                    return 2
+                _fail(f"{p}: {exc}")
+            except Exception as exc:  # noqa: BLE001 -- a folder run goes on past a bug in one input
+                if args.verbose:
+                    raise
+                failures += 1
+                bar.clear()
+                _fail(f"{p}: internal error {type(exc).__name__}: {exc} (rerun with -v for the traceback)")
             bar.update(done + 3 - bar.n)
-    return 1 if failures else 0
+    if failures and len(paths) > 1:
+        _fail(f"{failures} of {len(paths)} inputs failed")
+    return 2 if failures else 0
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -247,15 +330,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(f"torchsym demo: reflection plane of the embedded sample {path.name} (4,000 points, known plane)")
     from tqdm import tqdm
 
-    from torchsym.errors import TorchsymError
-
     args.config, args.kind, args.no_figures = None, None, False
-    try:
-        with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
-            record = _run_one(path, "chair", args, {}, bar, frozenset([path.resolve()]))
-    except TorchsymError as exc:
-        print(f"torchsym demo: {exc}", file=sys.stderr)
-        return 2
+    with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
+        record = _run_one(path, "chair", args, {}, bar, frozenset([path.resolve()]))
     n_true, b_true = data.sample_plane()
     import torch
 
@@ -272,8 +349,16 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line, ``torchsym: error: ...``, exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        _fail(message)
+        raise SystemExit(2)
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="torchsym",
         description="Reflection symmetry detection in point clouds, meshes, images and d-dimensional point sets.",
     )
@@ -312,12 +397,28 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; every error is one line ``torchsym: error: ...`` and exit code 2
+    (a traceback only with ``-v``)."""
     args = _parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(name)s: %(message)s")
     import torch
 
+    from torchsym.errors import TorchsymError
+
     torch.set_num_threads(min(2, torch.get_num_threads()))
-    return int(args.func(args))
+    try:
+        return int(args.func(args))
+    except TorchsymError as exc:
+        _fail(str(exc))
+        return 2
+    except KeyboardInterrupt:
+        _fail("interrupted")
+        return 130
+    except Exception as exc:  # noqa: BLE001 -- never a traceback without -v
+        if args.verbose:
+            raise
+        _fail(f"internal error {type(exc).__name__}: {exc} (rerun with -v for the traceback)")
+        return 2
 
 
 if __name__ == "__main__":

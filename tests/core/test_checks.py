@@ -2,7 +2,16 @@ import numpy as np
 import pytest
 import torch
 
-from torchsym.core.checks import as_tensor, check_image, check_int, check_points, check_positive
+from torchsym.core.checks import (
+    as_tensor,
+    check_dense,
+    check_image,
+    check_int,
+    check_points,
+    check_positive,
+    check_scale,
+    scale_problem,
+)
 from torchsym.errors import InputShapeError, InputValueError, TorchsymError
 
 
@@ -71,3 +80,49 @@ class TestScalars:
 
     def test_as_tensor_list(self):
         assert as_tensor([[1, 2], [3, 4]], "x").dtype == torch.float64
+
+
+class TestCheckDense:
+    def test_smoke(self):
+        assert check_dense(torch.zeros(3), "x").shape == (3,)
+
+    @pytest.mark.parametrize("make, message", [
+        (lambda: torch.zeros(5, 3).to_sparse(), "expected a dense tensor, got layout torch.sparse_coo"),
+        (lambda: torch.zeros(5, 3).to_sparse_csr(), "expected a dense tensor, got layout torch.sparse_csr"),
+        (lambda: torch.empty(5, 3, device="meta"), "expected a tensor holding data, got one on the meta device"),
+    ])
+    def test_exception(self, make, message):
+        with pytest.raises(InputShapeError, match=f"points: {message}"):
+            check_points(make())
+
+    def test_big_endian_array(self):
+        assert as_tensor(np.arange(6, dtype=">f8").reshape(2, 3), "x").tolist() == [[0, 1, 2], [3, 4, 5]]
+
+    def test_float128_array(self):
+        with pytest.raises(InputShapeError, match="x: expected a float, integer or boolean array"):
+            as_tensor(np.zeros(3, dtype=np.longdouble), "x")
+
+
+class TestScale:
+    def test_smoke(self):
+        pts = torch.rand(100, 3, generator=_gen())
+        assert scale_problem(pts) is None and check_scale(pts, "points") is pts
+
+    def test_stray_point(self):
+        pts = torch.rand(1000, 3, generator=_gen())
+        pts[17] = 1e20
+        with pytest.raises(InputValueError, match=r"points: point 17 lies 1e\+20 from the median point.*far outside the rest"):
+            check_scale(pts, "points")
+
+    def test_far_but_representable_outlier_kept(self):
+        pts = torch.rand(1000, 3, generator=_gen(), dtype=torch.float64)
+        pts[3] = 1e6  # far, but the rest is still far above float64's rounding
+        assert scale_problem(pts) is None
+
+    def test_overflowing_scale(self):
+        pts = torch.rand(50, 3, generator=_gen(), dtype=torch.float64) * 1e200
+        with pytest.raises(InputValueError, match=r"x: coordinates up to .*e\+(199|200) overflow torch.float64 in sums of squares"):
+            check_scale(pts, "x")
+
+    def test_coincident_points(self):
+        assert scale_problem(torch.zeros(10, 3)) is None

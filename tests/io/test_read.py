@@ -6,7 +6,7 @@ import torch
 
 import torchsym
 from torchsym.errors import InputFileError
-from torchsym.errors import InputShapeError
+from torchsym.errors import InputShapeError, InputValueError
 from torchsym.io import infer_kind, load_input, read_image, read_mesh, read_pointcloud, write_image, write_mesh, write_ply
 from torchsym.mesh import Mesh
 
@@ -163,3 +163,72 @@ class TestWriteMesh:
             write_mesh(tmp_path / "m.ply", mesh.vertices)
         with pytest.raises(InputShapeError, match=r"colors: expected \(4, 3\) per-vertex RGB, got \(3, 3\)"):
             write_mesh(tmp_path / "m.ply", mesh, colors=torch.rand(3, 3))
+
+
+def _png_header(width: int, height: int) -> bytes:
+    """A PNG's signature, IHDR and an empty IDAT: the size, no pixel data."""
+    import struct
+    import zlib
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    out = b"\x89PNG\r\n\x1a\n"
+    for kind, data in ((b"IHDR", ihdr), (b"IDAT", b""), (b"IEND", b"")):
+        out += struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    return out
+
+
+class TestLimitsAndBadValues:
+    """Inputs that raised untyped errors, allocated gigabytes or were read wrong."""
+
+    def test_empty_npy(self, tmp_path):
+        (tmp_path / "e.npy").write_bytes(b"")
+        with pytest.raises(InputFileError, match=r"e.npy' as a NumPy array"):
+            load_input(tmp_path / "e.npy")
+
+    def test_complex_npy_refused(self, tmp_path):
+        np.save(tmp_path / "c.npy", np.ones((5, 3)) * (1 + 2j))
+        with pytest.raises(InputFileError, match=r"c.npy' to hold a real \(N, D\) array, got complex128 \(5, 3\)"):
+            read_pointcloud(tmp_path / "c.npy")
+
+    def test_npy_big_endian_and_limits(self, tmp_path):
+        np.save(tmp_path / "b.npy", np.arange(30, dtype=">f8").reshape(10, 3))
+        assert read_pointcloud(tmp_path / "b.npy", dtype=torch.float64)[-1].tolist() == [27, 28, 29]
+        with pytest.raises(InputFileError, match=r"holds 10 points, more than max_points=5"):
+            read_pointcloud(tmp_path / "b.npy", max_points=5)
+
+    def test_text_limit_before_parsing(self, tmp_path):
+        np.savetxt(tmp_path / "a.xyz", np.random.default_rng(0).random((10, 3)))
+        with pytest.raises(InputFileError, match=r"holds 10 lines, more than max_points=5"):
+            read_pointcloud(tmp_path / "a.xyz", max_points=5)
+
+    @pytest.mark.parametrize("row", ["1 nan 0", "1 inf 0", "1 1e39 0"])
+    def test_non_finite_from_the_reader(self, tmp_path, row):
+        (tmp_path / "a.xyz").write_text(f"0 0 0\n{row}\n0 1 0\n")
+        with pytest.raises(InputValueError, match=r"a.xyz' holds 1 NaN or infinite coordinates \(first in row 1"):
+            load_input(tmp_path / "a.xyz")
+
+    def test_stray_coordinate(self, tmp_path):
+        pts = np.random.default_rng(0).random((1000, 3))
+        pts[17] = 1e20
+        np.savetxt(tmp_path / "s.xyz", pts)
+        with pytest.raises(InputValueError, match=r"s.xyz': point 17 lies 1e\+20 from .* a coordinate far outside the rest"):
+            torchsym.detect(tmp_path / "s.xyz")
+
+    def test_image_size_read_from_the_header(self, tmp_path):
+        (tmp_path / "huge.png").write_bytes(_png_header(25_000, 25_000))
+        with pytest.raises(InputFileError, match=r"huge.png' is larger than max_pixels=50000000"):
+            read_image(tmp_path / "huge.png")
+        (tmp_path / "big.png").write_bytes(_png_header(8000, 8000))
+        with pytest.raises(InputFileError, match=r"big.png' is 8000 x 8000 = 64000000 pixels, more than max_pixels=50000000"):
+            load_input(tmp_path / "big.png")
+
+    def test_max_pixels(self, tmp_path):
+        write_image(tmp_path / "i.png", torch.rand(3, 10, 12, generator=_gen()))
+        assert read_image(tmp_path / "i.png", max_pixels=120).shape == (3, 10, 12)
+        with pytest.raises(InputFileError, match=r"is 12 x 10 = 120 pixels, more than max_pixels=119"):
+            read_image(tmp_path / "i.png", max_pixels=119)
+
+    def test_symlink_loop(self, tmp_path):
+        (tmp_path / "loop.xyz").symlink_to(tmp_path / "loop.xyz")
+        with pytest.raises(InputFileError, match=r"loop.xyz' is a symbolic link to nothing"):
+            load_input(tmp_path / "loop.xyz")

@@ -16,12 +16,15 @@ from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = [
     "as_tensor",
+    "check_dense",
     "check_finite",
     "check_image",
     "check_in_range",
     "check_int",
     "check_points",
     "check_positive",
+    "check_scale",
+    "scale_problem",
 ]
 
 
@@ -46,15 +49,20 @@ def as_tensor(
     anything that is not numeric.
     """
     if isinstance(x, torch.Tensor):
-        t = x
+        t = check_dense(x, name)
     elif isinstance(x, np.ndarray):
         if not (np.issubdtype(x.dtype, np.number) or x.dtype == np.bool_):
             raise InputShapeError(f"{name}: expected a numeric array, got dtype {x.dtype}")
-        t = torch.from_numpy(np.ascontiguousarray(x))
+        if not x.dtype.isnative:
+            x = x.astype(x.dtype.newbyteorder("="))
+        try:
+            t = torch.from_numpy(np.ascontiguousarray(x))
+        except TypeError:
+            raise InputShapeError(f"{name}: expected a float, integer or boolean array, got dtype {x.dtype}") from None
     elif isinstance(x, (list, tuple)):
         try:
             t = torch.as_tensor(np.asarray(x, dtype=np.float64))
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             raise InputShapeError(f"{name}: expected a numeric array, got {type(x).__name__} ({exc})") from None
     else:
         raise InputShapeError(f"{name}: expected a tensor or array, got {type(x).__name__}")
@@ -67,6 +75,50 @@ def as_tensor(
     if device is not None:
         t = t.to(device)
     return t
+
+
+def check_dense(t: torch.Tensor, name: str) -> torch.Tensor:
+    """Raise :class:`InputShapeError` unless ``t`` is a dense (strided) tensor holding data
+    (not sparse, not on the ``meta`` device); return ``t``."""
+    if t.layout != torch.strided:
+        raise InputShapeError(f"{name}: expected a dense tensor, got layout {t.layout}; call .to_dense() first")
+    if t.is_meta:
+        raise InputShapeError(f"{name}: expected a tensor holding data, got one on the meta device")
+    return t
+
+
+def scale_problem(points: torch.Tensor) -> str | None:
+    """What makes the coordinates of ``points (..., N, D)`` unusable in their dtype, or None.
+
+    Two cases: a point whose distance from the median point (largest coordinate
+    difference) exceeds the median such distance by more than ``1 / eps`` of the dtype,
+    so the rest of the cloud is below its rounding error (a stray value such as 1e20);
+    or coordinates whose squares summed over the points overflow the dtype.
+    """
+    if not points.is_floating_point() or points.numel() == 0 or points.dim() < 2:
+        return None
+    t = points.detach().reshape(-1, points.shape[-1]).to(torch.float64)  # (M, D)
+    finfo = torch.finfo(torch.promote_types(points.dtype, torch.float32))  # solvers compute in >= float32
+    if t.shape[0] >= 3:
+        dist = (t - t.median(dim=0).values).abs().amax(dim=1)  # (M,)
+        typical, far = float(dist.median()), float(dist.max())
+        if typical > 0 and far * finfo.eps > typical:
+            i = int(dist.argmax())
+            return (f"point {i} lies {far:.3g} from the median point, {far / typical:.2g} times the median "
+                    f"distance {typical:.3g} of the points: a coordinate far outside the rest (a stray value?)")
+    biggest = float(t.abs().max())
+    if biggest > math.sqrt(finfo.max / t.numel()):
+        return (f"coordinates up to {biggest:.3g} overflow {torch.promote_types(points.dtype, torch.float32)} in sums of squares over "
+                f"{t.numel()} entries; rescale the input")
+    return None
+
+
+def check_scale(points: torch.Tensor, name: str) -> torch.Tensor:
+    """Raise :class:`InputValueError` where :func:`scale_problem` finds one; return ``points``."""
+    problem = scale_problem(points)
+    if problem is not None:
+        raise InputValueError(f"{name}: {problem}")
+    return points
 
 
 def check_finite(t: torch.Tensor, name: str) -> torch.Tensor:

@@ -2,6 +2,8 @@
 
 from torchsym.io.read import (
     IMAGE_SUFFIXES,
+    MAX_PIXELS,
+    MAX_POINTS,
     MESH_SUFFIXES,
     POINT_SUFFIXES,
     infer_kind,
@@ -14,6 +16,8 @@ from torchsym.io.write import write_image, write_json, write_mesh, write_ply
 
 __all__ = [
     "IMAGE_SUFFIXES",
+    "MAX_PIXELS",
+    "MAX_POINTS",
     "MESH_SUFFIXES",
     "POINT_SUFFIXES",
     "infer_kind",
