@@ -13,6 +13,19 @@ file, resume and lock), :mod:`~torchsym.runner.task` (one input on a worker),
 
 from torchsym.runner.driver import RunSummary, expand_inputs, run
 from torchsym.runner.engine import EngineError
+from torchsym.runner.evaluate import Evaluation, GroundTruth, evaluate, format_evaluation, read_truth
 from torchsym.runner.store import ResultsStore, read_results
 
-__all__ = ["EngineError", "ResultsStore", "RunSummary", "evaluate", "expand_inputs", "read_results", "run"]
+__all__ = [
+    "EngineError",
+    "Evaluation",
+    "GroundTruth",
+    "ResultsStore",
+    "RunSummary",
+    "evaluate",
+    "expand_inputs",
+    "format_evaluation",
+    "read_results",
+    "read_truth",
+    "run",
+]

@@ -220,8 +220,8 @@ def run(
                 counts[outcome["status"]] += 1
                 if outcome["status"] == "crashed":
                     logger.warning("%s: crashed on every attempt (%d)", spec.input, attempts)
-                bar.update(1)
                 bar.set_postfix(ok=counts["ok"], error=counts["error"], crashed=counts["crashed"], refresh=False)
+                bar.update(1)
     return RunSummary(
         str(out), chosen, len(paths), skipped, counts["ok"], counts["error"], counts["crashed"],
         time.perf_counter() - t0, engine_seconds,
