@@ -8,8 +8,9 @@ cloud decides what happens:
 - ``x0 == 777``: the process dies the first time (a marker file in ``marker_dir``), then
   the task succeeds;
 - ``x0 == 555``: a :class:`~torchsym.errors.InputValueError`;
-- otherwise the result is the cloud's mean; with ``die_after = k > 0`` the process dies
-  when it starts its k-th input (a counter file in ``marker_dir``).
+- otherwise the result is the cloud's mean; with the environment variable
+  ``RUNNER_PROBE_DIE_AFTER=k`` the process dies when it starts its k-th input (a counter
+  file in ``marker_dir``), a driver killed mid-run (the config, hence its hash, unchanged).
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ from torchsym.errors import InputValueError
 @dataclasses.dataclass(frozen=True)
 class ProbeSettings(Settings):
     marker_dir: str = setting("", "folder for the crash markers and the counter")
-    die_after: int = setting(0, "die when starting this input (1-based); 0: never", low=0)
     sleep: float = setting(0.0, "seconds to sleep per input", unit="s", low=0.0)
 
 
@@ -61,7 +61,8 @@ if "runner_probe" not in SOLVERS:
         def forward(self, data, generator=None):
             s = self.settings
             x0 = float(data[0, 0])
-            if s.die_after and _count(s.marker_dir) == s.die_after:
+            die_after = int(os.environ.get("RUNNER_PROBE_DIE_AFTER", "0"))
+            if die_after and _count(s.marker_dir) == die_after:
                 os._exit(3)
             if x0 == 666:
                 os._exit(4)

@@ -11,17 +11,17 @@ Three engines give the same records (only where a task runs changes):
   ``dask-jobqueue``.
 
 Each worker sets ``torch.set_num_threads(threads_per_worker)`` and imports torchsym when
-it starts (:class:`~torchsym.runner.worker.WorkerSetup`). At most ``max_in_flight`` tasks (default: one per
-worker thread) are submitted at a time, so a 100,000-input run never builds a large
-graph. A worker that dies mid-task makes the scheduler raise ``KilledWorker`` for the
-tasks it held (the local cluster is started with ``allowed-failures = 0``); the driver
-resubmits each up to ``retries`` times, then records it as ``"crashed"``. The scheduler
-blames every task a dead worker held, queued or running: one task per thread keeps the
-queued ones out of the blame (docs/design/runner.md).
+it starts (:class:`~torchsym.runner.worker.WorkerSetup`). At most one task per live worker thread is submitted
+at a time, so a 100,000-input run never builds a large graph. A worker that dies
+mid-task makes the scheduler raise ``KilledWorker`` for the tasks it held (the local
+cluster is started with ``allowed-failures = 0``); the driver runs such a task again alone
+(so that a second death is its own) up to ``retries`` times, then records it as
+``"crashed"`` (docs/design/runner.md).
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import logging
 import time
@@ -32,7 +32,7 @@ from typing import Any
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 from torchsym.runner.task import TaskSpec, run_task
 
-__all__ = ["ENGINES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "open_engine", "serial_outcomes"]
+__all__ = ["ENGINES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster", "open_engine", "serial_outcomes"]
 
 logger = logging.getLogger(__name__)
 
@@ -59,13 +59,16 @@ def _crashed(attempts: int, exc: BaseException) -> dict[str, Any]:
 
 
 def serial_outcomes(specs: Sequence[TaskSpec], threads: int) -> Iterator[Outcome]:
-    """Run ``specs`` one after another in this process, torch limited to ``threads``."""
+    """Run ``specs`` one after another in this process, torch, BLAS and OpenMP limited to
+    ``threads`` threads as on a worker (the results do not depend on the engine)."""
     import torch
+    from threadpoolctl import threadpool_limits
 
     before = torch.get_num_threads()
     try:
-        for spec in specs:
-            yield spec, run_task(spec), 1
+        with threadpool_limits(threads):  # BLAS and OpenMP as on a worker
+            for spec in specs:
+                yield spec, run_task(spec), 1
     finally:
         torch.set_num_threads(before)
 
@@ -87,6 +90,20 @@ def _scheduler_target(address: str | None) -> dict[str, Any]:
     return {"address": addr}
 
 
+def local_cluster(workers: int, threads: int) -> Any:
+    """A ``distributed.LocalCluster`` of ``workers`` processes with ``threads`` threads
+    each, on loopback, no dashboard, whose scheduler fails a task on its first dead
+    worker (``allowed-failures = 0``: the driver does the retries and counts them)."""
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        return LocalCluster(
+            n_workers=workers, threads_per_worker=threads, processes=True, host="127.0.0.1",
+            dashboard_address=None, silence_logs=logging.ERROR,
+        )
+
+
 @contextlib.contextmanager
 def dask_client(
     engine: str, *, address: str | None, workers: int, threads: int, imports: Sequence[str] = (), connect_timeout: float = 5.0
@@ -97,22 +114,14 @@ def dask_client(
     Raises:
         EngineError: the scheduler cannot be reached within ``connect_timeout`` seconds.
     """
-    import dask
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     from torchsym.runner.worker import WorkerSetup
 
     stack = contextlib.ExitStack()
     with stack:
         if engine == "local":
-            conf = {"distributed.scheduler.allowed-failures": 0, "distributed.scheduler.worker-saturation": 1.0}
-            with dask.config.set(conf):
-                cluster = stack.enter_context(
-                    LocalCluster(
-                        n_workers=workers, threads_per_worker=threads, processes=True,
-                        dashboard_address=None, silence_logs=logging.ERROR,
-                    )
-                )
+            cluster = stack.enter_context(local_cluster(workers, threads))
             client = stack.enter_context(Client(cluster))
             where = "a local cluster"
         else:
@@ -129,46 +138,72 @@ def dask_client(
         yield client
 
 
-def dask_outcomes(client: Any, specs: Sequence[TaskSpec], *, retries: int, max_in_flight: int) -> Iterator[Outcome]:
-    """Run ``specs`` on ``client``'s workers, at most ``max_in_flight`` at a time, yielding
-    each input's outcome as it completes; a task whose worker died is resubmitted up to
-    ``retries`` times, then yields a ``"crashed"`` outcome."""
+def _alive_threads(client: Any, max_in_flight: int | None) -> int:
+    n = sum(client.nthreads().values())
+    return n if max_in_flight is None else min(n, max_in_flight)
+
+
+def _error_outcome(exc: BaseException) -> dict[str, Any]:
+    return {"status": "error", "kind": None, "result": None, "seconds": 0.0, "artifacts": [],
+            "error": {"type": type(exc).__name__, "message": str(exc), "where": "engine"}}
+
+
+def dask_outcomes(
+    client: Any, specs: Sequence[TaskSpec], *, retries: int, max_in_flight: int | None = None, wait_workers: float = 600.0
+) -> Iterator[Outcome]:
+    """Run ``specs`` on ``client``'s workers, yielding each input's outcome as it completes.
+
+    At most one task per live worker thread is in flight (``max_in_flight`` caps it
+    further). The scheduler blames every task a dying worker holds, and a task sent to a
+    worker that is dying at the same moment is blamed too; so a task whose worker died is
+    a suspect, not a culprit: no new task is submitted until the tasks in flight are done,
+    then each suspect runs alone on the cluster, where a second death is its own. A
+    suspect is run up to ``retries`` more times, then yields a ``"crashed"`` outcome.
+
+    Raises:
+        EngineError: no worker for ``wait_workers`` seconds.
+    """
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
-    pending = iter(specs)
+    queue = collections.deque((spec, 1) for spec in specs)
+    suspects: collections.deque[tuple[TaskSpec, int]] = collections.deque()
     flying: dict[str, tuple[TaskSpec, int]] = {}
     done = as_completed()
     token = f"{time.time_ns():x}"
-
-    def submit(spec: TaskSpec, attempt: int) -> None:
-        fut = client.submit(run_task, spec, key=f"torchsym-{token}-{spec.index}-{attempt}", pure=False, retries=0)
-        flying[fut.key] = (spec, attempt)
-        done.add(fut)
-
-    for spec in pending:
-        submit(spec, 1)
-        if len(flying) >= max_in_flight:
-            break
-    for fut in done:
+    capacity = full = _alive_threads(client, max_in_flight)
+    while queue or suspects or flying:
+        if suspects and not flying:  # a suspect runs alone
+            todo = [suspects.popleft()]
+        else:
+            todo = [queue.popleft() for _ in range(min(len(queue), capacity - len(flying)))] if not suspects else []
+        for spec, attempt in todo:
+            fut = client.submit(run_task, spec, key=f"torchsym-{token}-{spec.index}-{attempt}", pure=False, retries=0)
+            flying[fut.key] = (spec, attempt)
+            done.add(fut)
+        if not flying:  # every worker is gone: wait for one (a nanny restarts them)
+            try:
+                client.wait_for_workers(1, timeout=wait_workers)
+            except TimeoutError:
+                raise EngineError(f"engine: no Dask worker for {wait_workers:g} s; {len(queue)} inputs left") from None
+            capacity = _alive_threads(client, max_in_flight)
+            continue
+        fut = next(done)
         spec, attempt = flying.pop(fut.key)
         try:
             outcome, exc = fut.result(), None
         except Exception as err:  # KilledWorker, or the task's result could not come back
-            outcome, exc = None, err
+            outcome, exc = _error_outcome(err), err
         fut.release()
+        if isinstance(exc, KilledWorker) or capacity < full:
+            capacity = _alive_threads(client, max_in_flight)
+            full = max(full, capacity)
         if isinstance(exc, KilledWorker):
             if attempt <= retries:
-                logger.warning("%s: its worker died (attempt %d); resubmitted", spec.input, attempt)
-                submit(spec, attempt + 1)
+                logger.warning("%s: its worker died (attempt %d); to run again alone", spec.input, attempt)
+                suspects.append((spec, attempt + 1))
                 continue
             outcome = _crashed(attempt, exc)
-        elif exc is not None:  # the task never ran to its end for another reason (e.g. unpicklable result)
-            outcome = {"status": "error", "kind": None, "result": None, "seconds": 0.0, "artifacts": [],
-                       "error": {"type": type(exc).__name__, "message": str(exc), "where": "engine"}}
-        nxt = next(pending, None)
-        if nxt is not None:
-            submit(nxt, 1)
         yield spec, outcome, attempt
 
 
@@ -194,5 +229,4 @@ def open_engine(
     t0 = time.perf_counter()
     with dask_client(engine, address=address, workers=workers, threads=threads, imports=imports,
                      connect_timeout=connect_timeout) as client:
-        limit = max_in_flight or max(1, sum(client.nthreads().values()))
-        yield dask_outcomes(client, specs, retries=retries, max_in_flight=limit), time.perf_counter() - t0
+        yield dask_outcomes(client, specs, retries=retries, max_in_flight=max_in_flight), time.perf_counter() - t0

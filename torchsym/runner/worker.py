@@ -12,7 +12,7 @@ __all__ = ["WorkerSetup"]
 
 
 class WorkerSetup(WorkerPlugin):
-    """Limit torch to ``threads`` threads and import torchsym (and ``imports``) once per
+    """Limit torch, BLAS and OpenMP to ``threads`` threads and import torchsym (and ``imports``) once per
     worker, before its first task.
 
     Args:
@@ -28,8 +28,10 @@ class WorkerSetup(WorkerPlugin):
 
     def setup(self, worker: Any) -> None:
         import torch
+        from threadpoolctl import threadpool_limits
 
         torch.set_num_threads(self.threads)
+        threadpool_limits(self.threads)  # BLAS and OpenMP, as the serial engine sets them
         importlib.import_module("torchsym")
         for name in self.imports:
             importlib.import_module(name)
