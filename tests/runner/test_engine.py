@@ -1,5 +1,6 @@
 """The Dask engines on real clusters: a LocalCluster started by the run, and a separately
-started scheduler with two workers reached by its address."""
+started scheduler with two workers reached by its address. Slow: starting workers, and
+restarting the ones the probe kills, imports torch each time."""
 
 from pathlib import Path
 
@@ -11,7 +12,7 @@ import torchsym
 from torchsym.runner import read_results, run
 from torchsym.runner.engine import local_cluster
 
-pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning")
+pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning")]
 
 
 def _by_name(path: Path) -> dict[str, dict]:

@@ -11,8 +11,8 @@ Three engines give the same records (only where a task runs changes):
   ``dask-jobqueue``.
 
 Each worker sets ``torch.set_num_threads(threads_per_worker)`` and imports torchsym when
-it starts (:class:`~torchsym.runner.worker.WorkerSetup`). At most one task per live worker thread is submitted
-at a time, so a 100,000-input run never builds a large graph. A worker that dies
+it starts (:class:`~torchsym.runner.worker.WorkerSetup`). One task per live worker thread is in flight
+(``max_in_flight``), so a 100,000-input run never builds a large graph. A worker that dies
 mid-task makes the scheduler raise ``KilledWorker`` for the tasks it held (the local
 cluster is started with ``allowed-failures = 0``); the driver runs such a task again alone
 (so that a second death is its own) up to ``retries`` times, then records it as
@@ -138,9 +138,10 @@ def dask_client(
         yield client
 
 
-def _alive_threads(client: Any, max_in_flight: int | None) -> int:
-    n = sum(client.nthreads().values())
-    return n if max_in_flight is None else min(n, max_in_flight)
+def _capacity(client: Any, max_in_flight: int | None) -> int:
+    """Tasks to keep in flight: ``max_in_flight``, or one per live worker thread."""
+    live = sum(client.nthreads().values())
+    return live if max_in_flight is None or live == 0 else max_in_flight
 
 
 def _error_outcome(exc: BaseException) -> dict[str, Any]:
@@ -153,12 +154,15 @@ def dask_outcomes(
 ) -> Iterator[Outcome]:
     """Run ``specs`` on ``client``'s workers, yielding each input's outcome as it completes.
 
-    At most one task per live worker thread is in flight (``max_in_flight`` caps it
-    further). The scheduler blames every task a dying worker holds, and a task sent to a
-    worker that is dying at the same moment is blamed too; so a task whose worker died is
-    a suspect, not a culprit: no new task is submitted until the tasks in flight are done,
-    then each suspect runs alone on the cluster, where a second death is its own. A
-    suspect is run up to ``retries`` more times, then yields a ``"crashed"`` outcome.
+    One task per live worker thread is in flight, or ``max_in_flight``. The scheduler
+    blames every task a dying worker holds, queued or running, and a task sent to a
+    worker dying at that moment: so a task whose worker died is a suspect, not a culprit.
+    No new task is submitted until the tasks in flight are done; then each suspect runs
+    alone on the cluster, where a second death is its own. A suspect runs up to
+    ``retries`` more times, then yields a ``"crashed"`` outcome. With one task per
+    thread no task waits queued on a worker, so ``attempts`` counts the deaths of the
+    task's own worker; a larger ``max_in_flight`` hides the driver's round trip but a
+    task queued behind a crashing one is run again (and counts an attempt).
 
     Raises:
         EngineError: no worker for ``wait_workers`` seconds.
@@ -169,9 +173,9 @@ def dask_outcomes(
     queue = collections.deque((spec, 1) for spec in specs)
     suspects: collections.deque[tuple[TaskSpec, int]] = collections.deque()
     flying: dict[str, tuple[TaskSpec, int]] = {}
-    done = as_completed()
+    done = as_completed(with_results=True, raise_errors=False)
     token = f"{time.time_ns():x}"
-    capacity = full = _alive_threads(client, max_in_flight)
+    capacity = full = _capacity(client, max_in_flight)
     while queue or suspects or flying:
         if suspects and not flying:  # a suspect runs alone
             todo = [suspects.popleft()]
@@ -186,17 +190,18 @@ def dask_outcomes(
                 client.wait_for_workers(1, timeout=wait_workers)
             except TimeoutError:
                 raise EngineError(f"engine: no Dask worker for {wait_workers:g} s; {len(queue)} inputs left") from None
-            capacity = _alive_threads(client, max_in_flight)
+            capacity = _capacity(client, max_in_flight)
             continue
-        fut = next(done)
+        fut, value = next(done)  # the result is gathered in the background
         spec, attempt = flying.pop(fut.key)
-        try:
-            outcome, exc = fut.result(), None
-        except Exception as err:  # KilledWorker, or the task's result could not come back
-            outcome, exc = _error_outcome(err), err
+        if fut.status == "finished":
+            outcome, exc = value, None
+        else:  # KilledWorker, or the task's result could not come back; an error comes as (type, exc, tb)
+            exc = value[1] if isinstance(value, tuple) else value
+            outcome = _error_outcome(exc)
         fut.release()
         if isinstance(exc, KilledWorker) or capacity < full:
-            capacity = _alive_threads(client, max_in_flight)
+            capacity = _capacity(client, max_in_flight)
             full = max(full, capacity)
         if isinstance(exc, KilledWorker):
             if attempt <= retries:
