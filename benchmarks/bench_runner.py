@@ -346,7 +346,7 @@ def main() -> None:
             runs.append(timed_run(name, "separate", cfg, inputs, work / f"{name}_separate.jsonl", me,
                                   address=str(cluster.file), **extra))
         clean = next(r for r in runs if r["dataset"] == "clouds" and r["engine"] == "separate")["items_per_s"]
-        clouds = sorted(str(p) for p in (work / "clouds").glob("*.npy"))[: max(30, args.clouds // 2)]
+        clouds = sorted(str(p) for p in (work / "clouds").glob("*.npy"))[: max(30, args.clouds // 4)]
         kw = killed_worker(cluster, str(REPO / "configs" / "pointcloud_plane.yaml"), clouds, work / "killed_worker.jsonl", clean)
     kd = killed_driver(str(work / "tiny" / "*.npy"), work, args.clouds, 0.05, args.clouds // 3)
     evaluations = [evaluate_row("clouds", work / "clouds_serial.jsonl", planes)]

@@ -122,3 +122,16 @@ class TestExpandInputs:
         got = expand_inputs([str(tmp_path / "in"), str(files[0]), str(tmp_path / "in" / "c*.xyz")])
         assert got == [f.resolve() for f in files]
         assert len(expand_inputs([str(tmp_path / "**" / "*.xyz")])) == 4
+
+
+class TestChooseEngine:
+    def test_auto(self, monkeypatch):
+        from torchsym.runner.driver import SERIAL_MAX, _choose_engine
+
+        monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+        assert _choose_engine("auto", SERIAL_MAX, None) == "serial"
+        assert _choose_engine("auto", SERIAL_MAX + 1, None) == "local"
+        assert _choose_engine("auto", 1, "tcp://127.0.0.1:8786") == "dask"
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://127.0.0.1:8786")
+        assert _choose_engine("auto", 1, None) == "dask"
+        assert _choose_engine("serial", 100, None) == "serial"

@@ -88,7 +88,7 @@ def add_parsers(sub: Any) -> None:
     r.add_argument("--out", required=True, help="the JSON-lines results file")
     r.add_argument("--engine", choices=["auto", "serial", "local", "dask"], default="auto",
                    help="serial: in this process; local: a Dask LocalCluster; dask: the scheduler at --address "
-                        "(default auto: dask with --address, serial for at most 4 pending inputs, else local)")
+                        "(default auto: dask with --address or DASK_SCHEDULER_ADDRESS, serial for at most 4 pending inputs, else local)")
     r.add_argument("--address", help="Dask scheduler: tcp://host:8786 or a scheduler.json (default: DASK_SCHEDULER_ADDRESS)")
     r.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default: %(default)s)")
     r.add_argument("--threads", type=int, default=1, help="torch threads per task (default: %(default)s)")

@@ -12,6 +12,7 @@ import glob
 import hashlib
 import importlib
 import logging
+import os
 import sys
 import time
 from collections import Counter
@@ -133,7 +134,7 @@ def _choose_engine(engine: str, n_todo: int, address: str | None) -> str:
         raise InputValueError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
     if engine != "auto":
         return engine
-    if address is not None:
+    if address is not None or os.environ.get("DASK_SCHEDULER_ADDRESS"):
         return "dask"
     return "serial" if n_todo <= SERIAL_MAX else "local"
 
@@ -164,8 +165,9 @@ def run(
         out: the JSON-lines results file (:mod:`torchsym.runner.store`); inputs already
             done there with the same file and config are skipped.
         engine: ``"serial"``, ``"local"`` (a Dask ``LocalCluster``), ``"dask"`` (the
-            scheduler at ``address``) or ``"auto"``: ``"dask"`` when ``address`` is
-            given, else serial for at most 4 pending inputs and local otherwise.
+            scheduler at ``address``) or ``"auto"``: ``"dask"`` when ``address`` or
+            ``DASK_SCHEDULER_ADDRESS`` is given, else serial for at most 4 pending
+            inputs and local otherwise.
         address: Dask scheduler, ``tcp://host:8786`` or a ``scheduler.json`` path
             (default ``DASK_SCHEDULER_ADDRESS``).
         workers: worker processes of the local cluster (default 2).
