@@ -39,7 +39,6 @@ __all__ = ["FINAL_STATUSES", "InputKey", "ResultsStore", "config_hash", "input_k
 
 #: statuses after which an input is not run again (with the same key)
 FINAL_STATUSES = ("ok", "error")
-STATUSES = ("ok", "error", "crashed")
 
 
 def config_hash(config: Mapping[str, Any]) -> str:
@@ -224,7 +223,3 @@ class ResultsStore:
         self._fh.flush()
         os.fsync(self._fh.fileno())
         self._latest[str(record.get("input"))] = dict(record)
-
-    def records(self) -> Iterator[dict[str, Any]]:
-        """The latest record of every input seen so far."""
-        return iter(list(self._latest.values()))
