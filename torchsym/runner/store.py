@@ -218,7 +218,10 @@ class ResultsStore:
         """Write one record as a line, flushed and fsync-ed before returning."""
         if self._fh is None:
             raise InputFileError(f"results: {str(self.path)!r} is not open")
-        line = json.dumps(to_jsonable(dict(record)), allow_nan=False, default=str)
+        try:
+            line = json.dumps(record, allow_nan=False, default=str)
+        except ValueError:  # NaN or inf somewhere: written as null
+            line = json.dumps(to_jsonable(dict(record)), allow_nan=False, default=str)
         self._fh.write(line + "\n")
         self._fh.flush()
         os.fsync(self._fh.fileno())
