@@ -13,8 +13,8 @@ Per dataset and engine: items per second (without and with the engine's start-up
 the mean seconds of a task as the records give them, the overhead per item
 (``wall x workers / n - mean task seconds``), and the peak resident memory of the driver
 and its cluster's processes together (sampled every 0.1 s). Then: the time lost when a
-worker of the separate cluster is killed with SIGKILL a third of the way through the
-clouds, and a driver (local engine, sleeping no-op tasks) killed with SIGKILL mid-run
+worker of the separate cluster is killed with SIGKILL a third of the way through a
+quarter of the clouds (against the same clouds without a kill, interleaved, twice), and a driver (local engine, sleeping no-op tasks) killed with SIGKILL mid-run
 and resumed: the records before the kill, duplicates, missing inputs and the tasks that
 ran twice (those in flight at the kill). The clouds and photos are also scored with
 ``torchsym.evaluate`` against their ground truth.
@@ -186,34 +186,53 @@ def _count_lines(path: Path) -> int:
     return path.read_bytes().count(b"\n") if path.is_file() else 0
 
 
-def killed_worker(cluster: SeparateCluster, cfg: Any, inputs: list[str], out: Path, clean_rate: float) -> dict[str, Any]:
-    """Run ``inputs`` on the separate cluster and SIGKILL one worker a third of the way."""
-    from torchsym.runner import read_results, run
+def _separate_run(cluster: SeparateCluster, cfg: Any, inputs: list[str], out: Path, kill_after: int | None) -> tuple[float, Any]:
+    """Busy seconds of one run on the separate cluster, SIGKILLing one worker after
+    ``kill_after`` records (None: no kill); and the run's summary."""
+    from distributed import Client
+
+    from torchsym.runner import run
 
     out.unlink(missing_ok=True)
     pid = cluster.worker_pids()[0]
-    at = len(inputs) // 3
-    killed: dict[str, float] = {}
 
     def killer() -> None:
-        while _count_lines(out) < at:
+        while _count_lines(out) < kill_after:
             time.sleep(0.02)
         os.kill(pid, signal.SIGKILL)
-        killed["t"] = time.perf_counter()
 
     thread = threading.Thread(target=killer, daemon=True)
-    thread.start()
+    if kill_after is not None:
+        thread.start()
     summary = run(cfg, inputs, out, address=str(cluster.file), resume=False)
-    thread.join(timeout=1)
-    records = read_results(out)
-    busy = summary.seconds - summary.engine_seconds
+    if kill_after is not None:
+        thread.join(timeout=1)
+        with Client(scheduler_file=str(cluster.file), timeout="30s") as client:
+            client.wait_for_workers(cluster.workers, timeout=120)  # the nanny's restart, before the next run
+    return summary.seconds - summary.engine_seconds, summary
+
+
+def killed_worker(cluster: SeparateCluster, cfg: Any, inputs: list[str], work: Path) -> dict[str, Any]:
+    """Runs of ``inputs`` on the separate cluster, clean and with one worker SIGKILLed a
+    third of the way, interleaved (clean, killed, clean, killed): the time lost is the
+    mean killed run minus the mean clean run."""
+    from torchsym.runner import read_results
+
+    at = len(inputs) // 3
+    clean, killed, retried, ok = [], [], 0, 0
+    for rep in range(2):
+        clean.append(_separate_run(cluster, cfg, inputs, work / "clean_worker.jsonl", None)[0])
+        busy, summary = _separate_run(cluster, cfg, inputs, work / "killed_worker.jsonl", at)
+        killed.append(busy)
+        ok += summary.n_ok
+        retried += sum(1 for r in read_results(work / "killed_worker.jsonl") if r["attempts"] > 1)
+    mean_clean, mean_killed = sum(clean) / 2, sum(killed) / 2
     row = {
-        "n": len(inputs), "killed_after": at, "ok": summary.n_ok, "crashed": summary.n_crashed,
-        "retried": sum(1 for r in records if r["attempts"] > 1), "wall_s": busy,
-        "expected_s": len(inputs) / clean_rate, "lost_s": busy - len(inputs) / clean_rate,
+        "n": len(inputs), "killed_after": at, "repeats": 2, "ok": ok, "retried": retried,
+        "clean_s": clean, "killed_s": killed, "lost_s": mean_killed - mean_clean,
     }
-    print(f"  worker killed after {at} of {len(inputs)}: {row['ok']} ok, {row['retried']} retried, "
-          f"{row['lost_s']:.1f} s lost ({busy:.1f} s against {row['expected_s']:.1f} s)", flush=True)
+    print(f"  worker killed after {at} of {len(inputs)} (2 repeats): {ok} ok, {retried} retried; clean "
+          f"{[round(c, 1) for c in clean]} s, killed {[round(k, 1) for k in killed]} s: {row['lost_s']:.1f} s lost", flush=True)
     return row
 
 
@@ -286,10 +305,11 @@ def _markdown(res: dict[str, Any]) -> str:
     k = res["killed_worker"]
     lines += [
         "",
-        f"Worker killed (SIGKILL) on the separate cluster after {k['killed_after']} of {k['n']} clouds: "
-        f"{k['ok']} ok, {k['crashed']} crashed, {k['retried']} retried; {k['wall_s']:.1f} s against "
-        f"{k['expected_s']:.1f} s at the clean rate: **{k['lost_s']:.1f} s lost** (the worker's restart, the "
-        "task it was running, and the other worker draining before the suspect runs alone).",
+        f"Worker killed (SIGKILL) on the separate cluster after {k['killed_after']} of {k['n']} clouds, against the "
+        f"same clouds without a kill, interleaved, twice: clean {', '.join(f'{c:.1f}' for c in k['clean_s'])} s, "
+        f"killed {', '.join(f'{c:.1f}' for c in k['killed_s'])} s: **{k['lost_s']:.1f} s lost** on average "
+        f"(the task the worker was running, the other worker draining before the suspect runs alone, and the "
+        f"cluster at one worker while the nanny restarts it). {k['ok']} of {2 * k['n']} ok, {k['retried']} retried.",
     ]
     d = res["killed_driver"]
     lines += [
@@ -345,9 +365,8 @@ def main() -> None:
         for name, cfg, inputs, extra in datasets:
             runs.append(timed_run(name, "separate", cfg, inputs, work / f"{name}_separate.jsonl", me,
                                   address=str(cluster.file), **extra))
-        clean = next(r for r in runs if r["dataset"] == "clouds" and r["engine"] == "separate")["items_per_s"]
         clouds = sorted(str(p) for p in (work / "clouds").glob("*.npy"))[: max(30, args.clouds // 4)]
-        kw = killed_worker(cluster, str(REPO / "configs" / "pointcloud_plane.yaml"), clouds, work / "killed_worker.jsonl", clean)
+        kw = killed_worker(cluster, str(REPO / "configs" / "pointcloud_plane.yaml"), clouds, work)
     kd = killed_driver(str(work / "tiny" / "*.npy"), work, args.clouds, 0.05, args.clouds // 3)
     evaluations = [evaluate_row("clouds", work / "clouds_serial.jsonl", planes)]
     if args.photos and (photos / "axes.txt").is_file():
