@@ -5,7 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import runner_probe_solvers  # noqa: F401  (registers the test-only solver "runner_probe")
+import runner_probe_solvers
+
+runner_probe_solvers.unregister()  # registered by the fixture below, during runner tests only
 
 PROBE = "runner_probe_solvers"
 
@@ -28,3 +30,12 @@ def markers(tmp_path: Path) -> Path:
     d = tmp_path / "markers"
     d.mkdir()
     return d
+
+
+@pytest.fixture(autouse=True)
+def probe_solver():
+    """The test-only solver ``runner_probe``, registered during each test only (the
+    registry-wide tests elsewhere must not see it)."""
+    runner_probe_solvers.register()
+    yield
+    runner_probe_solvers.unregister()

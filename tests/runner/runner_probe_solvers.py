@@ -50,29 +50,39 @@ def _count(marker_dir: str) -> int:
     return n
 
 
-if "runner_probe" not in SOLVERS:
+class ProbeSolver(Solver):
+    """Test-only solver (tests/runner)."""
 
-    @register_solver("runner_probe", kind="pointcloud")
-    class ProbeSolver(Solver):
-        """Test-only solver (tests/runner)."""
+    settings_class = ProbeSettings
 
-        settings_class = ProbeSettings
+    def forward(self, data, generator=None):
+        s = self.settings
+        x0 = float(data[0, 0])
+        die_after = int(os.environ.get("RUNNER_PROBE_DIE_AFTER", "0"))
+        if die_after and _count(s.marker_dir) == die_after:
+            os._exit(3)
+        if x0 == 666:
+            os._exit(4)
+        if x0 == 777:
+            marker = Path(s.marker_dir) / "once"
+            if not marker.exists():
+                marker.write_text("died")
+                os._exit(5)
+        if x0 == 555:
+            raise InputValueError("points: the probe refuses x0 = 555")
+        if s.sleep:
+            time.sleep(s.sleep)
+        return ProbeResult(data.double().mean(0), float(data.shape[0]), 1.0)
 
-        def forward(self, data, generator=None):
-            s = self.settings
-            x0 = float(data[0, 0])
-            die_after = int(os.environ.get("RUNNER_PROBE_DIE_AFTER", "0"))
-            if die_after and _count(s.marker_dir) == die_after:
-                os._exit(3)
-            if x0 == 666:
-                os._exit(4)
-            if x0 == 777:
-                marker = Path(s.marker_dir) / "once"
-                if not marker.exists():
-                    marker.write_text("died")
-                    os._exit(5)
-            if x0 == 555:
-                raise InputValueError("points: the probe refuses x0 = 555")
-            if s.sleep:
-                time.sleep(s.sleep)
-            return ProbeResult(data.double().mean(0), float(data.shape[0]), 1.0)
+
+def register() -> None:
+    """Register ``runner_probe`` (done on import; the tests' fixture removes it after each test)."""
+    if "runner_probe" not in SOLVERS:
+        register_solver("runner_probe", kind="pointcloud")(ProbeSolver)
+
+
+def unregister() -> None:
+    SOLVERS._entries.pop("runner_probe", None)
+
+
+register()

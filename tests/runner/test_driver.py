@@ -51,7 +51,7 @@ class TestRunSerial:
         out = tmp_path / "r.jsonl"
         script = (
             "import sys, torchsym; sys.path.insert(0, sys.argv[1]); import runner_probe_solvers\n"
-            "from conftest import probe_config\n"
+            "from conftest import probe_config\nrunner_probe_solvers.register()\n"
             "torchsym.run(probe_config(sys.argv[2]), sys.argv[3], sys.argv[4], engine='serial')\n"
         )
         env = {**os.environ, "RUNNER_PROBE_DIE_AFTER": "4"}

@@ -64,4 +64,7 @@ class TestSeparateScheduler:
             rb = {k: v for k, v in b[name].items() if k not in drop}
             ra["result"] = {k: v for k, v in ra["result"].items() if k not in drop}
             rb["result"] = {k: v for k, v in rb["result"].items() if k not in drop}
+            # the residual of these exactly symmetric clouds is ~5e-8, rounding noise: after the
+            # LocalCluster test in the same process it has differed in its last bits
+            assert ra["result"].pop("residual") == pytest.approx(rb["result"].pop("residual"), abs=1e-9)
             assert ra == rb, (name, [k for k in ra["result"] if ra["result"][k] != rb["result"][k]])
