@@ -13,6 +13,7 @@ from torchsym.api import detect
 from torchsym.core.config import Pipeline, PipelineConfig, build_pipeline, load_config
 from torchsym.core.registry import SOLVERS, register_solver
 from torchsym.core.results import Result
+from torchsym.runner import evaluate, read_results, run
 from torchsym.errors import (
     ConfigError,
     InputFileError,
@@ -40,6 +41,7 @@ __all__ = [
     "build_pipeline",
     "data",
     "detect",
+    "evaluate",
     "geometry",
     "image",
     "io",
@@ -48,7 +50,9 @@ __all__ = [
     "metrics",
     "pointcloud",
     "pointset",
+    "read_results",
     "register_solver",
+    "run",
 ]
 from torchsym import image as _image, mesh as _mesh, pointcloud as _pointcloud, pointset as _pointset  # noqa: E402
 

@@ -393,6 +393,10 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--n", type=int, default=30000, help="points per cloud (default: %(default)s)")
     b.add_argument("--repeats", type=int, default=5, help="clouds timed (default: %(default)s)")
     b.set_defaults(func=_cmd_bench)
+
+    from torchsym.runner.cli import add_parsers
+
+    add_parsers(sub)  # run, evaluate
     return p
 
 

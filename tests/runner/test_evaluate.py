@@ -1,0 +1,145 @@
+"""evaluate on small runs whose figures are worked out by hand (in the comments)."""
+
+import json
+import math
+
+import pytest
+
+from torchsym.errors import InputFileError, InputValueError
+from torchsym.runner import evaluate, format_evaluation, read_truth
+from torchsym.runner.store import ResultsStore
+
+
+def _write(path, records):
+    with ResultsStore(path, resume=False) as store:
+        for rec in records:
+            store.append({"size": 0, "mtime_ns": 0, "config_hash": "h", "error": None, **rec})
+    return path
+
+
+def _plane(name, normal, offset, score):
+    return {"input": f"/data/{name}", "status": "ok", "result": {"type": "ReflectionPlaneResult", "normal": normal, "offset": offset, "score": score}}
+
+
+class TestPlanes:
+    def test_value(self, tmp_path):
+        c3, s3 = math.cos(math.radians(3)), math.sin(math.radians(3))
+        results = _write(tmp_path / "r.jsonl", [
+            _plane("a.ply", [1, 0, 0], 0.0, 0.9),  # exact: correct
+            _plane("b.ply", [0, c3, s3], 0.0, 0.8),  # 3 deg off, through the centre: correct
+            _plane("c.ply", [0, 0, 1], -0.5, 0.7),  # parallel, 0.5 / (2 sqrt 3) = 0.144 of the diagonal away: wrong
+            {"input": "/data/d.ply", "status": "crashed", "result": None},  # missed
+            _plane("e.ply", [1, 0, 0], 0.0, 0.5),  # no ground truth: left out
+        ])
+        box = {"box_min": [-1, -1, -1], "box_max": [1, 1, 1]}
+        truth = tmp_path / "planes.jsonl"
+        truth.write_text("\n".join(json.dumps({"input": n, "normal": v, "offset": 0.0, **box})
+                                   for n, v in [("a.ply", [1, 0, 0]), ("b.ply", [0, 1, 0]), ("c", [0, 0, 1]), ("d.ply", [1, 0, 0])]))
+        ev = evaluate(results, truth)
+        assert (ev.kind, ev.n_records, ev.n_scored, ev.n_failed, ev.n_no_truth) == ("pointcloud", 5, 4, 1, 1)
+        plane = ev.summary["plane"]
+        # 2 correct of 3 detections, 4 planes: P = 2/3, R = 1/2, F = 4/7
+        assert plane["precision"] == pytest.approx(2 / 3) and plane["recall"] == pytest.approx(0.5)
+        assert plane["f"] == pytest.approx(4 / 7)
+        # PR over scores 0.9 (T), 0.8 (T), 0.7 (F): best at 0.8, P = 1, R = 1/2, F = 2/3
+        assert plane["max_f"] == pytest.approx(2 / 3)
+        rows = {r["input"].split("/")[-1]: r for r in ev.items}
+        assert rows["b.ply"]["angle_deg"] == pytest.approx(3.0) and rows["b.ply"]["correct"]
+        assert rows["c.ply"]["distance"] == pytest.approx(0.5 / (2 * math.sqrt(3))) and not rows["c.ply"]["correct"]
+        assert rows["d.ply"]["status"] == "crashed" and rows["d.ply"]["angle_deg"] is None
+        text = format_evaluation(ev)
+        assert "| plane |" in text and "0.571" in text
+        json.dumps(ev.to_dict())
+
+
+def _axes(name, axes, scores):
+    return {"input": f"/photos/{name}", "status": "ok",
+            "result": {"type": "ReflectionAxesResult", "axes": axes, "scores": scores, "image_size": [100, 100]}}
+
+
+class TestAxes:
+    def test_value(self, tmp_path):
+        results = _write(tmp_path / "r.jsonl", [
+            _axes("i1.png", [[50, 0, 50, 100], [0, 50, 100, 50]], [5.0, 3.0]),  # right, then wrong
+            _axes("i2.png", [[12, 0, 12, 100]], [4.0]),  # 2 px off: right under both criteria
+            _axes("i3.png", [[40, 0, 40, 100]], [2.0]),  # 10 px off: thesis 2.5 px no, challenge 20 px yes
+        ])
+        truth = tmp_path / "axes.txt"
+        truth.write_text("# image x1 y1 x2 y2\ni1.png 50 0 50 100\ni2.png 10 0 10 100\ni2.png 0 20 100 20\ni3.png 30 0 30 100\n")
+        ev = evaluate(results, truth)
+        assert (ev.kind, ev.n_scored) == ("image", 3)
+        thesis, challenge = ev.summary["thesis"], ev.summary["challenge"]
+        # thesis: 2 of 4 detections right, 4 axes: P = R = F = 1/2; best threshold 4: P = 1, R = 1/2
+        assert (thesis["precision"], thesis["recall"], thesis["f"]) == pytest.approx((0.5, 0.5, 0.5))
+        assert thesis["max_f"] == pytest.approx(2 / 3)
+        # challenge: 3 of 4 right: P = R = F = 3/4, the best at the lowest threshold
+        assert (challenge["precision"], challenge["recall"], challenge["max_f"]) == pytest.approx((0.75, 0.75, 0.75))
+        rows = {r["input"].split("/")[-1]: r for r in ev.items}
+        assert rows["i1.png"]["top_correct_thesis"] and rows["i1.png"]["correct_thesis"] == 1
+        assert not rows["i3.png"]["top_correct_thesis"] and rows["i3.png"]["top_correct_challenge"]
+        assert rows["i2.png"]["n_truth"] == 2
+
+    def test_shared_axes_txt(self, shared_data):
+        gt = read_truth(shared_data / "images" / "reflection_single_dev" / "axes.txt")
+        assert gt.kind == "image" and len(gt.items) == 32
+        assert gt.find("/anywhere/refs_003.jpg").tolist() == [[80.0, 32.0, 80.0, 145.0]]
+
+
+def _grid_off(path):
+    """A flat 5 x 5 grid, x in -2..2, y in 0..4 (area 16), vertex r * 5 + c at (c - 2, r)."""
+    verts = [(c - 2, r, 0) for r in range(5) for c in range(5)]
+    faces = []
+    for r in range(4):
+        for c in range(4):
+            v = r * 5 + c
+            faces += [(v, v + 1, v + 6), (v, v + 6, v + 5)]
+    path.write_text("OFF\n" + f"{len(verts)} {len(faces)} 0\n" + "".join(f"{x} {y} {z}\n" for x, y, z in verts)
+                    + "".join(f"3 {a} {b} {c}\n" for a, b, c in faces))
+    return path
+
+
+class TestMeshes:
+    def test_value(self, tmp_path):
+        mirror = [r * 5 + 4 - c for r in range(5) for c in range(5)]
+        results = _write(tmp_path / "r.jsonl", [
+            {"input": str(_grid_off(tmp_path / "m1.off")), "status": "ok", "result": {"map": mirror}},
+            {"input": str(_grid_off(tmp_path / "m2.off")), "status": "ok", "result": {"map": list(range(25))}},
+            {"input": str(tmp_path / "m3.off"), "status": "error", "result": None},
+        ])
+        corres = tmp_path / "truth" / "corres"
+        corres.mkdir(parents=True)
+        for name in ("m1", "m2", "m3"):  # row 2: (10, 14), (11, 13), (12, 12), 1-based
+            (corres / f"{name}.vts").write_text("11\n12\n13\n")
+            (corres / f"{name}.sym.vts").write_text("15\n14\n13\n")
+        ev = evaluate(results, tmp_path / "truth")
+        rows = {r["input"].split("/")[-1]: r for r in ev.items}
+        # tolerance sqrt(16 / (20 pi)) = 0.505: the mirror map is exact; the identity map
+        # is 4, 2 and 0 away from the truth: 1 of 3; the failed mesh counts 0
+        assert rows["m1.off"]["rate"] == 1.0 and rows["m2.off"]["rate"] == pytest.approx(1 / 3)
+        assert rows["m1.off"]["threshold"] == pytest.approx(math.sqrt(16 / (20 * math.pi)))
+        assert rows["m3.off"]["rate"] == 0.0
+        assert ev.summary["mesh"]["mesh_rate"] == pytest.approx(1 / 3)  # only m1 above 75 %
+        assert ev.summary["mesh"]["mean_rate"] == pytest.approx(4 / 9)
+
+
+class TestExceptions:
+    def test_bad_truth(self, tmp_path):
+        bad = tmp_path / "axes.txt"
+        bad.write_text("i1.png 1 2 3\n")
+        with pytest.raises(InputFileError, match=r"line 1 of .*axes\.txt.*expected 'image x1 y1 x2 y2'"):
+            read_truth(bad)
+        planes = tmp_path / "p.jsonl"
+        planes.write_text('{"input": "a", "normal": [1, 0], "offset": 0}\n')
+        with pytest.raises(InputFileError, match=r"line 1 of .*p\.jsonl.*expected 'normal' as a list of 3 numbers"):
+            read_truth(planes)
+        with pytest.raises(InputFileError, match="holds no NAME.vts"):
+            read_truth(tmp_path)
+        with pytest.raises(InputFileError, match="--truth: .*nothing.txt' does not exist"):
+            read_truth(tmp_path / "nothing.txt")
+
+    def test_no_matching_names(self, tmp_path):
+        results = _write(tmp_path / "r.jsonl", [_plane("a.ply", [1, 0, 0], 0.0, 0.9)])
+        truth = tmp_path / "planes.jsonl"
+        truth.write_text(json.dumps({"input": "zzz.ply", "normal": [1, 0, 0], "offset": 0}) + "\n")
+        with pytest.raises(InputValueError, match=r"no record of the run has ground truth .*'a\.ply'.*zzz\.ply"):
+            evaluate(results, truth)

@@ -1,0 +1,236 @@
+"""``torchsym.run``: one config over a whole dataset, resumable, on any engine.
+
+The driver expands the input patterns, checks them against the config, opens the results
+file (:mod:`torchsym.runner.store`: lock, resume), hands the inputs not yet done to an
+engine (:mod:`torchsym.runner.engine`) and writes one record per input as it completes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import glob
+import hashlib
+import importlib
+import logging
+import os
+import sys
+import time
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from torchsym.core.config import PipelineConfig, load_config
+from torchsym.core.results import Result
+from torchsym.errors import ConfigError, InputFileError, InputValueError
+from torchsym.runner.engine import ENGINES, open_engine
+from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key
+from torchsym.runner.task import TaskSpec
+
+__all__ = ["RunSummary", "expand_inputs", "run"]
+
+logger = logging.getLogger(__name__)
+
+#: the automatic engine runs this many pending inputs or fewer in the driver (workers pay
+#: seconds to import torch)
+SERIAL_MAX = 4
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSummary(Result):
+    """What a run did.
+
+    Attributes:
+        out: the results file.
+        engine: the engine used (``"serial"``, ``"local"`` or ``"dask"``).
+        n_inputs: inputs matched by the patterns.
+        n_skipped: inputs already done in the results file (same file, same config).
+        n_ok, n_error, n_crashed: records written by this run, by status.
+        seconds: wall time of the run, engine start-up included.
+        engine_seconds: of which starting the engine (cluster up, workers set up).
+    """
+
+    out: str
+    engine: str
+    n_inputs: int
+    n_skipped: int
+    n_ok: int
+    n_error: int
+    n_crashed: int
+    seconds: float
+    engine_seconds: float
+
+    @property
+    def n_run(self) -> int:
+        """Records written by this run."""
+        return self.n_ok + self.n_error + self.n_crashed
+
+
+def _suffixes() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    from torchsym.io.read import IMAGE_SUFFIXES, POINT_SUFFIXES
+
+    return IMAGE_SUFFIXES, POINT_SUFFIXES
+
+
+def expand_inputs(patterns: Sequence[str | Path]) -> list[Path]:
+    """Files named by ``patterns`` (paths, folders, globs with ``**``), sorted, each once.
+
+    A folder gives its files with a known suffix (not recursing); a glob its matching
+    files.
+
+    Raises:
+        InputFileError: a pattern matches no file (the pattern is named).
+    """
+    image, point = _suffixes()
+    known = set(image + point)
+    if isinstance(patterns, (str, Path)):
+        patterns = [patterns]
+    found: dict[str, Path] = {}
+    for pat in patterns:
+        p = Path(pat)
+        if p.is_dir():
+            hits = [q for q in p.iterdir() if q.is_file() and q.suffix.lower() in known]
+        elif p.is_file():
+            hits = [p]
+        else:
+            hits = [Path(q) for q in glob.glob(str(pat), recursive=True) if Path(q).is_file()]
+        if not hits:
+            raise InputFileError(f"--inputs: the pattern {str(pat)!r} matches no file")
+        for q in hits:
+            found.setdefault(str(q.resolve()), q.resolve())
+    return sorted(found.values())
+
+
+def _check_kinds(cfg: PipelineConfig, paths: Sequence[Path]) -> None:
+    """Refuse, before anything runs, inputs whose suffix the config's input kind cannot read."""
+    image, _ = _suffixes()
+    want_image = cfg.input == "image"
+    wrong = [p for p in paths if (p.suffix.lower() in image) != want_image]
+    if wrong:
+        what = "an image" if not want_image else "not an image"
+        raise ConfigError(
+            f"config: pipeline {cfg.source!r} takes {cfg.input!r} input, but {str(wrong[0])!r} is {what} "
+            f"({len(wrong)} of {len(paths)} inputs)"
+        )
+
+
+def _stems(paths: Sequence[Path]) -> list[str]:
+    """Picture stems: the file's stem, with a hash of its path where two inputs share one."""
+    counts = Counter(p.stem for p in paths)
+    return [p.stem if counts[p.stem] == 1 else f"{p.stem}_{hashlib.sha1(str(p).encode()).hexdigest()[:8]}" for p in paths]
+
+
+def _record(key: InputKey, outcome: Mapping[str, Any], attempts: int) -> dict[str, Any]:
+    rec = key.as_dict()
+    for name in ("status", "kind", "result", "error", "seconds"):
+        rec[name] = outcome.get(name)
+    rec["attempts"] = attempts
+    rec["artifacts"] = list(outcome.get("artifacts") or [])
+    return rec
+
+
+def _choose_engine(engine: str, n_todo: int, address: str | None) -> str:
+    if engine not in ENGINES:
+        raise InputValueError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine != "auto":
+        return engine
+    if address is not None or os.environ.get("DASK_SCHEDULER_ADDRESS"):
+        return "dask"
+    return "serial" if n_todo <= SERIAL_MAX else "local"
+
+
+def run(
+    config: str | Path | Mapping[str, Any] | PipelineConfig,
+    inputs: str | Path | Sequence[str | Path],
+    out: str | Path,
+    *,
+    engine: str = "auto",
+    address: str | None = None,
+    workers: int = 2,
+    threads_per_worker: int = 1,
+    retries: int = 2,
+    resume: bool = True,
+    overrides: Mapping[str, Any] | None = None,
+    figures: str | Path | None = None,
+    imports: Sequence[str] = (),
+    max_in_flight: int | None = None,
+    connect_timeout: float = 5.0,
+    progress: bool = False,
+) -> RunSummary:
+    """Run one pipeline config over every input and record each outcome in ``out``.
+
+    Args:
+        config: a YAML path, a mapping or a :class:`PipelineConfig`.
+        inputs: paths, folders or glob patterns (``data/**/*.ply``).
+        out: the JSON-lines results file (:mod:`torchsym.runner.store`); inputs already
+            done there with the same file and config are skipped.
+        engine: ``"serial"``, ``"local"`` (a Dask ``LocalCluster``), ``"dask"`` (the
+            scheduler at ``address``) or ``"auto"``: ``"dask"`` when ``address`` or
+            ``DASK_SCHEDULER_ADDRESS`` is given, else serial for at most 4 pending
+            inputs and local otherwise.
+        address: Dask scheduler, ``tcp://host:8786`` or a ``scheduler.json`` path
+            (default ``DASK_SCHEDULER_ADDRESS``).
+        workers: worker processes of the local cluster (default 2).
+        threads_per_worker: torch threads per task, on every engine (default 1).
+        retries: resubmissions of a task whose worker died, before it is recorded as
+            ``"crashed"`` (default 2). Errors raised by a task are never retried.
+        resume: False starts ``out`` afresh.
+        overrides: settings of the config's last solver (``{"n_starts": 2}``, dotted keys
+            for groups).
+        figures: folder for each result's pictures (:func:`torchsym.viz.write_artifacts`);
+            None writes none.
+        imports: modules each worker imports first (to register your own solvers).
+        max_in_flight: tasks in flight on a Dask engine (default: one per live worker thread; more hides the driver's round trip, but a task queued behind a crashing one is run again).
+        connect_timeout: seconds to reach a remote scheduler (default 5).
+        progress: show a progress bar over completions (skipped inputs counted done).
+
+    Returns:
+        :class:`RunSummary`.
+
+    Raises:
+        InputFileError: a pattern matches nothing; ``out`` is locked by another run.
+        ConfigError: a bad config, or inputs of a kind the config does not take.
+        EngineError: the Dask scheduler cannot be reached.
+    """
+    t0 = time.perf_counter()
+    for name in imports:  # they may register the config's solvers
+        importlib.import_module(name)
+    cfg = config if isinstance(config, PipelineConfig) else load_config(config)
+    cfg = cfg.with_overrides(dict(overrides or {}))
+    cfg_dict = cfg.to_dict()
+    paths = expand_inputs(inputs)
+    _check_kinds(cfg, paths)
+    digest = config_hash(cfg_dict)
+    keys = [input_key(p, digest) for p in paths]
+    stems = _stems(paths)
+    threads = int(threads_per_worker)
+    fig_dir = None if figures is None else str(Path(figures).resolve())
+    counts: Counter[str] = Counter()
+    with ResultsStore(out, resume=resume) as store:
+        if store.torn_bytes:
+            logger.warning("%s: cut a torn last line (%d bytes)", out, store.torn_bytes)
+        todo = [i for i, k in enumerate(keys) if not store.is_done(k)]
+        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, stems[i], tuple(imports)) for i in todo]
+        chosen = _choose_engine(engine, len(specs), address)
+        skipped = len(paths) - len(specs)
+        with _progress(len(paths), skipped, progress) as bar, open_engine(
+            chosen, specs, address=address, workers=workers, threads=threads, imports=imports,
+            retries=retries, max_in_flight=max_in_flight, connect_timeout=connect_timeout,
+        ) as (outcomes, engine_seconds):
+            for spec, outcome, attempts in outcomes:
+                store.append(_record(keys[spec.index], outcome, attempts))
+                counts[outcome["status"]] += 1
+                if outcome["status"] == "crashed":
+                    logger.warning("%s: crashed on every attempt (%d)", spec.input, attempts)
+                bar.set_postfix(ok=counts["ok"], error=counts["error"], crashed=counts["crashed"], refresh=False)
+                bar.update(1)
+    return RunSummary(
+        str(out), chosen, len(paths), skipped, counts["ok"], counts["error"], counts["crashed"],
+        time.perf_counter() - t0, engine_seconds,
+    )
+
+
+def _progress(total: int, skipped: int, show: bool) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=skipped, unit="input", disable=not show, file=sys.stderr, dynamic_ncols=True)

@@ -1,0 +1,329 @@
+"""Scoring a run against ground truth with the library's metrics (:mod:`torchsym.metrics`).
+
+Ground truth comes in one documented format per kind of input; :func:`read_truth` tells
+them apart:
+
+- **photos** (``image``): a text file of ``image x1 y1 x2 y2`` lines, one ground-truth
+  axis per line (pixels, origin top-left; ``#`` starts a comment), the format of
+  ``axes.txt`` in ``../shared/data/images/reflection_single_dev``. Scored with the axis
+  protocol under both criteria (thesis: 3 deg and 0.025 min(w, h); challenge: 10 deg and
+  20 % of the ground-truth length, :func:`torchsym.metrics.evaluate_axes`).
+- **point clouds** (``pointcloud``): a ``.jsonl`` file, one plane per line:
+  ``{"input": "chair.ply", "normal": [nx, ny, nz], "offset": d}`` for the plane
+  ``normal . x + offset = 0``, optionally with ``"box_min"`` and ``"box_max"`` (the
+  object's bounding box; read from the input file when absent). Scored by plane
+  precision, recall and F (Sec. 5.2.4, :func:`torchsym.metrics.evaluate_planes`).
+- **meshes** (``mesh``): a folder of BCICP files, ``NAME.vts`` and ``NAME.sym.vts``
+  (directly or under ``corres/``): line k of each is the 1-based vertex of the mesh at
+  template landmark k and at its mirror landmark. Scored by the correspondence rate of
+  each mesh's map at the landmarks and the mesh rate, the share of meshes above 75 %
+  (Sec. 6.3.2, :func:`torchsym.metrics.correspondence_rate`, :func:`~torchsym.metrics.mesh_rate`).
+
+A record is matched to its ground truth by the input's path, file name or stem, in that
+order. Inputs without ground truth are left out (counted); inputs whose record is an
+error or a crash count as missed (no detection; a correspondence rate of 0).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from torchsym.core.results import Result
+from torchsym.errors import InputFileError, InputValueError
+from torchsym.runner.store import read_results
+
+__all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_truth"]
+
+
+@dataclasses.dataclass(frozen=True)
+class GroundTruth:
+    """Ground truth of one kind of input.
+
+    Attributes:
+        kind: ``"image"``, ``"pointcloud"`` or ``"mesh"``.
+        items: per input name (path, file name or stem): for images a ``(G, 4)`` float64
+            tensor of axes; for clouds ``{"normal" (3,), "offset" (), "box" (min, max) or
+            None}``; for meshes ``(L, 2)`` int64 0-based landmark pairs.
+        source: the file or folder read.
+    """
+
+    kind: str
+    items: dict[str, Any]
+    source: str
+
+    def find(self, input: str) -> Any | None:
+        """The ground truth of ``input`` (matched by path, file name, then stem), or None."""
+        p = Path(input)
+        for name in (str(input), p.name, p.stem):
+            if name in self.items:
+                return self.items[name]
+        return None
+
+
+def _read_axes_txt(path: Path) -> GroundTruth:
+    items: dict[str, list[list[float]]] = {}
+    for lineno, line in enumerate(path.read_text().splitlines(), 1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = line.split()
+        try:
+            if len(parts) != 5:
+                raise ValueError
+            coords = [float(v) for v in parts[1:]]
+        except ValueError:
+            raise InputFileError(f"truth: line {lineno} of {str(path)!r}: expected 'image x1 y1 x2 y2', got {line!r}") from None
+        items.setdefault(parts[0], []).append(coords)
+    return GroundTruth("image", {k: torch.tensor(v, dtype=torch.float64) for k, v in items.items()}, str(path))
+
+
+def _vector(rec: Mapping[str, Any], name: str, where: str) -> torch.Tensor:
+    try:
+        t = torch.tensor(rec[name], dtype=torch.float64)
+    except (KeyError, TypeError, ValueError):
+        raise InputFileError(f"truth: {where}: expected {name!r} as a list of 3 numbers, got {rec.get(name)!r}") from None
+    if t.shape != (3,):
+        raise InputFileError(f"truth: {where}: expected {name!r} as a list of 3 numbers, got {rec.get(name)!r}")
+    return t
+
+
+def _read_planes(path: Path) -> GroundTruth:
+    items: dict[str, Any] = {}
+    for lineno, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        where = f"line {lineno} of {str(path)!r}"
+        try:
+            rec = json.loads(line)
+            offset = float(rec["offset"])
+            name = str(rec["input"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            raise InputFileError(f"truth: {where}: expected {{\"input\", \"normal\", \"offset\"}}, got {line[:80]!r}") from None
+        box = (_vector(rec, "box_min", where), _vector(rec, "box_max", where)) if "box_min" in rec else None
+        items[name] = {"normal": _vector(rec, "normal", where), "offset": torch.tensor(offset, dtype=torch.float64), "box": box}
+    return GroundTruth("pointcloud", items, str(path))
+
+
+def _read_vts(folder: Path) -> GroundTruth:
+    items: dict[str, torch.Tensor] = {}
+    for sym in sorted(list(folder.glob("*.sym.vts")) + list(folder.glob("corres/*.sym.vts"))):
+        name = sym.name[: -len(".sym.vts")]
+        base = sym.with_name(f"{name}.vts")
+        if not base.is_file():
+            raise InputFileError(f"truth: {str(sym)!r} has no {base.name!r} beside it")
+        a, b = (np.loadtxt(f, dtype=np.int64, ndmin=1) for f in (base, sym))
+        if a.shape != b.shape:
+            raise InputFileError(f"truth: {base.name!r} and {sym.name!r} have {a.shape[0]} and {b.shape[0]} landmarks; expected as many")
+        items[name] = torch.from_numpy(np.stack([a, b], axis=1) - 1)  # (L, 2), 0-based
+    if not items:
+        raise InputFileError(f"truth: folder {str(folder)!r} holds no NAME.vts / NAME.sym.vts pairs")
+    return GroundTruth("mesh", items, str(folder))
+
+
+def read_truth(path: str | Path) -> GroundTruth:
+    """Read a ground-truth file or folder in one of the formats of the module docstring.
+
+    A folder is read as BCICP ``.vts`` files, a ``.jsonl``/``.json`` file as planes, any
+    other file as ``image x1 y1 x2 y2`` lines.
+
+    Raises:
+        InputFileError: missing, or not in the format its name announces (the line is named).
+    """
+    p = Path(path)
+    if p.is_dir():
+        return _read_vts(p)
+    if not p.is_file():
+        raise InputFileError(f"--truth: {str(p)!r} does not exist")
+    if p.suffix.lower() in (".jsonl", ".json"):
+        return _read_planes(p)
+    return _read_axes_txt(p)
+
+
+@dataclasses.dataclass(frozen=True)
+class Evaluation(Result):
+    """Scores of a run against ground truth.
+
+    Attributes:
+        kind: the kind of input scored (``"image"``, ``"pointcloud"``, ``"mesh"``).
+        n_records: records in the results file.
+        n_scored: records with ground truth, scored.
+        n_failed: of those, records with status ``error`` or ``crashed`` (counted as missed).
+        n_no_truth: records without ground truth (left out).
+        summary: the figures of the data set, by protocol (e.g. ``{"thesis": {"max_f":
+            ..., "precision": ..., "recall": ..., "f": ...}, "challenge": {...}}``).
+        items: one row per scored input (``input``, ``status`` and its figures).
+        truth: the ground-truth file or folder.
+    """
+
+    kind: str
+    n_records: int
+    n_scored: int
+    n_failed: int
+    n_no_truth: int
+    summary: dict[str, dict[str, float]]
+    items: list[dict[str, Any]]
+    truth: str
+
+
+def _ok(rec: Mapping[str, Any]) -> bool:
+    return rec.get("status") == "ok" and isinstance(rec.get("result"), Mapping)
+
+
+def _detected_axes(rec: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(axes (K, 4), scores (K,))`` of an image record; empty for a failed one."""
+    empty = (torch.zeros(0, 4, dtype=torch.float64), torch.zeros(0, dtype=torch.float64))
+    if not _ok(rec):
+        return empty
+    r = rec["result"]
+    if "axes" in r:
+        axes = torch.tensor(r["axes"], dtype=torch.float64).reshape(-1, 4)
+        return axes, torch.tensor(r["scores"], dtype=torch.float64).reshape(-1)
+    flat = [v for point in r.get("segment") or [] for v in point]
+    if len(flat) == 4 and None not in flat:  # one axis (pointsymm_image)
+        return torch.tensor(seg, dtype=torch.float64).reshape(1, 4), torch.tensor([float(r.get("score") or 0.0)], dtype=torch.float64)
+    return empty
+
+
+def _image_size(rec: Mapping[str, Any]) -> tuple[int, int]:
+    size = (rec.get("result") or {}).get("image_size")
+    if size:
+        return int(size[0]), int(size[1])
+    import cv2
+
+    img = cv2.imread(str(rec["input"]), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise InputFileError(f"input: cannot read {str(rec['input'])!r} to find its size")
+    return int(img.shape[0]), int(img.shape[1])
+
+
+def _score_images(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    from torchsym.metrics import AXIS_CRITERIA, evaluate_axes, match_axes
+
+    dets = [_detected_axes(rec) for rec, _ in pairs]
+    gts = [gt for _, gt in pairs]
+    sizes = [_image_size(rec) if _ok(rec) else (1, 1) for rec, _ in pairs]
+    summary, rows = {}, [{"n_detections": int(d[0].shape[0]), "n_truth": int(g.shape[0])} for d, g in zip(dets, gts)]
+    for crit in AXIS_CRITERIA:
+        ev = evaluate_axes(dets, gts, sizes, criterion=crit)
+        summary[crit] = {"max_f": ev.max_f, "precision": ev.precision, "recall": ev.recall, "f": ev.f}
+        for row, (axes, scores), gt, size in zip(rows, dets, gts, sizes):
+            correct = match_axes(axes, gt, image_size=size, scores=scores, criterion=crit)
+            row[f"correct_{crit}"] = int(correct.sum())
+            row[f"top_correct_{crit}"] = bool(correct[int(scores.argmax())]) if scores.numel() else False
+    return summary, rows
+
+
+def _box(rec: Mapping[str, Any], gt: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
+    if gt["box"] is not None:
+        return gt["box"]
+    from torchsym.io.read import read_pointcloud
+
+    pts = read_pointcloud(rec["input"], dtype=torch.float64)[:, :3]
+    return pts.min(0).values, pts.max(0).values
+
+
+def _score_clouds(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    from torchsym.metrics import evaluate_planes
+
+    dets, gts, boxes = [], [], []
+    for rec, gt in pairs:
+        if _ok(rec):
+            r = rec["result"]
+            score = float(r.get("score") if r.get("score") is not None else 1.0)
+            dets.append((torch.tensor(r["normal"], dtype=torch.float64), torch.tensor(float(r["offset"]), dtype=torch.float64), score))
+        else:
+            dets.append(None)
+        gts.append((gt["normal"], gt["offset"]))
+        boxes.append(_box(rec, gt))
+    sc = evaluate_planes(dets, gts, boxes)
+    summary = {
+        "plane": {"precision": sc.precision, "recall": sc.recall, "f": sc.f, "max_f": sc.curve.max_f,
+                  "threshold_max_f": sc.threshold_curve.max_f},
+    }
+    rows = [
+        {"angle_deg": _finite(a), "distance": _finite(d), "correct": bool(c)}
+        for a, d, c in zip(sc.angles.tolist(), sc.distances.tolist(), sc.correct.tolist())
+    ]
+    return summary, rows
+
+
+def _score_meshes(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    from torchsym.io.read import read_mesh
+    from torchsym.metrics import correspondence_rate, mesh_rate
+
+    rows = []
+    for rec, landmarks in pairs:
+        if not _ok(rec):
+            rows.append({"rate": 0.0, "n_landmarks": int(landmarks.shape[0])})
+            continue
+        mesh = read_mesh(rec["input"], dtype=torch.float64)
+        score = correspondence_rate(mesh, torch.tensor(rec["result"]["map"]), landmarks=landmarks)
+        rows.append({"rate": _finite(score.rate), "n_landmarks": score.num_evaluated, "threshold": score.threshold})
+    rates = [r["rate"] if r["rate"] is not None else 0.0 for r in rows]
+    summary = {"mesh": {"mean_rate": float(np.mean(rates)) if rates else math.nan, "mesh_rate": mesh_rate(rates)}}
+    return summary, rows
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+#: scorer per kind of ground truth: ``(records, truths) -> (summary, rows)``
+SCORERS: dict[str, Callable[[Sequence[tuple[Mapping[str, Any], Any]]], tuple[dict[str, dict[str, float]], list[dict[str, Any]]]]] = {
+    "image": _score_images,
+    "pointcloud": _score_clouds,
+    "mesh": _score_meshes,
+}
+
+
+def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Path | GroundTruth) -> Evaluation:
+    """Score a run's records against ground truth.
+
+    Args:
+        results: a results file (its latest record per input) or the records themselves.
+        truth: a ground-truth file or folder (formats in the module docstring), or a
+            :class:`GroundTruth`.
+
+    Returns:
+        :class:`Evaluation`: the data set's figures and one row per input.
+
+    Raises:
+        InputFileError: unreadable results or ground truth.
+        InputValueError: no record has ground truth (names do not match).
+    """
+    records = read_results(results) if isinstance(results, (str, Path)) else list(results)
+    gt = truth if isinstance(truth, GroundTruth) else read_truth(truth)
+    pairs = [(rec, gt.find(str(rec.get("input")))) for rec in records]
+    scored = [(rec, g) for rec, g in pairs if g is not None]
+    if not scored:
+        names = ", ".join(sorted(gt.items)[:3])
+        raise InputValueError(
+            f"truth: no record of the run has ground truth in {gt.source!r} (records like "
+            f"{Path(str(records[0].get('input'))).name if records else 'none'!r}, truth names like {names})"
+        )
+    summary, rows = SCORERS[gt.kind](scored)
+    items = [{"input": rec.get("input"), "status": rec.get("status"), **row} for (rec, _), row in zip(scored, rows)]
+    n_failed = sum(1 for rec, _ in scored if not _ok(rec))
+    return Evaluation(gt.kind, len(records), len(scored), n_failed, len(records) - len(scored), summary, items, gt.source)
+
+
+def format_evaluation(ev: Evaluation) -> str:
+    """The evaluation as a short text table (one row per protocol)."""
+    lines = [
+        f"{ev.kind}: {ev.n_scored} inputs scored against {ev.truth} ({ev.n_failed} failed, "
+        f"{ev.n_no_truth} without ground truth)",
+    ]
+    keys = sorted({k for figs in ev.summary.values() for k in figs})
+    lines.append("| protocol | " + " | ".join(keys) + " |")
+    lines.append("|---" * (len(keys) + 1) + "|")
+    for name, figs in ev.summary.items():
+        lines.append(f"| {name} | " + " | ".join(f"{figs[k]:.3f}" if k in figs else "" for k in keys) + " |")
+    return "\n".join(lines)

@@ -1,0 +1,228 @@
+"""The results file of a dataset run: JSON lines, one record per finished input.
+
+Only the driver writes it, one line per record, flushed and ``fsync``-ed before the next
+one, so a driver killed at any moment leaves every finished record on disk and at most a
+torn last line, which reopening cuts. A record::
+
+    {"input": "/data/chair.ply", "size": 81234, "mtime_ns": 1733212345000000000,
+     "config_hash": "3f2a...", "status": "ok", "kind": "pointcloud",
+     "result": {...}, "error": null, "seconds": 0.41, "attempts": 1, "artifacts": []}
+
+``status`` is ``"ok"`` (``result`` holds the solver's ``to_dict()``), ``"error"`` (a
+:class:`~torchsym.errors.TorchsymError` or another exception raised by the task: final,
+never retried; ``error`` holds ``{"type", "message"}``) or ``"crashed"`` (the worker
+running it died on every attempt). An input is done when its latest record has status
+``ok`` or ``error`` and the same path, size, mtime and config hash: reopening the file
+skips it; a crashed input, a changed file or another config runs again and its new
+record is appended (the latest record of an input wins).
+
+A lock (``fcntl.flock`` on ``<file>.lock``, released by the kernel when the driver dies,
+even by SIGKILL) stops a second driver appending to the same file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import errno
+import fcntl
+import hashlib
+import json
+import os
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+from torchsym.core.results import to_jsonable
+from torchsym.errors import InputFileError
+
+__all__ = ["FINAL_STATUSES", "InputKey", "ResultsStore", "config_hash", "input_key", "read_results"]
+
+#: statuses after which an input is not run again (with the same key)
+FINAL_STATUSES = ("ok", "error")
+
+
+def config_hash(config: Mapping[str, Any]) -> str:
+    """SHA-256 (hex, first 16 digits) of a config's ``input`` and ``steps``, keys sorted."""
+    core = {"input": config.get("input"), "steps": config.get("steps")}
+    return hashlib.sha256(json.dumps(core, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+@dataclasses.dataclass(frozen=True)
+class InputKey:
+    """What makes a record current: the input's resolved path, size, mtime and the config hash."""
+
+    input: str
+    size: int
+    mtime_ns: int
+    config_hash: str
+
+    def as_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def input_key(path: str | Path, config_digest: str) -> InputKey:
+    """The :class:`InputKey` of the file at ``path`` (``InputFileError`` if it is gone)."""
+    p = Path(path).resolve()
+    try:
+        st = p.stat()
+    except OSError as exc:
+        raise InputFileError(f"inputs: cannot read {str(p)!r} ({exc.strerror or exc})") from None
+    return InputKey(str(p), int(st.st_size), int(st.st_mtime_ns), config_digest)
+
+
+def _parse_lines(path: Path) -> tuple[list[dict[str, Any]], int]:
+    """Records of the file and the byte length of its intact part (to cut a torn last line).
+
+    Raises:
+        InputFileError: a line other than the last is not a JSON record.
+    """
+    data = path.read_bytes()
+    records: list[dict[str, Any]] = []
+    good = 0
+    pos = 0
+    while pos < len(data):
+        end = data.find(b"\n", pos)
+        line = data[pos:] if end < 0 else data[pos:end]
+        try:
+            rec = json.loads(line) if line.strip() else None
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            rec = False
+        last = end < 0 or end == len(data) - 1
+        if rec is False or (rec is not None and not isinstance(rec, dict)) or end < 0:
+            if last:
+                break  # torn last line (no newline, or cut inside the JSON): dropped
+            lineno = data.count(b"\n", 0, pos) + 1
+            raise InputFileError(f"results: line {lineno} of {str(path)!r} is not a JSON record; the file is not a torchsym results file")
+        if rec is not None:
+            records.append(rec)
+        pos = end + 1
+        good = pos
+    return records, good
+
+
+def read_results(path: str | Path, *, latest: bool = True) -> list[dict[str, Any]]:
+    """The records of a results file (a torn last line is ignored, the file left as it is).
+
+    Args:
+        path: a JSON-lines results file written by :func:`torchsym.run`.
+        latest: keep only the latest record of each input (the current one), in the
+            order the inputs first appear; False returns every line.
+
+    Raises:
+        InputFileError: the file does not exist or a line other than the last is not JSON.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputFileError(f"results: file {str(p)!r} does not exist")
+    records, _ = _parse_lines(p)
+    if not latest:
+        return records
+    by_input: dict[str, dict[str, Any]] = {}
+    for rec in records:
+        by_input[str(rec.get("input"))] = rec  # dicts keep first-insertion order
+    return list(by_input.values())
+
+
+class ResultsStore:
+    """The results file, opened by one driver: lock, read what is done, append records.
+
+    Use as a context manager::
+
+        with ResultsStore("results.jsonl") as store:
+            if not store.is_done(key):
+                store.append(record)
+
+    Args:
+        path: the JSON-lines file (created with its folder if missing).
+        resume: True reads the existing records (done inputs are skipped, a torn last
+            line is cut); False starts the file afresh.
+
+    Raises:
+        InputFileError: the file is locked by another driver, cannot be created, or is
+            not a results file.
+    """
+
+    def __init__(self, path: str | Path, *, resume: bool = True) -> None:
+        self.path = Path(path)
+        self.resume = resume
+        self._lock_fd: int | None = None
+        self._fh: Any = None
+        self._latest: dict[str, dict[str, Any]] = {}
+        self.torn_bytes = 0
+
+    def __enter__(self) -> ResultsStore:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def open(self) -> None:
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(str(self.path) + ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise InputFileError(f"--out: cannot create {str(self.path)!r} ({exc.strerror or exc})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise InputFileError(
+                    f"--out: {str(self.path)!r} is locked by another torchsym run (pid {holder}); "
+                    "wait for it to finish or choose another --out"
+                ) from None
+            raise InputFileError(f"--out: cannot lock {str(self.path)!r} ({exc.strerror or exc})") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        self._lock_fd = fd
+        try:
+            if self.resume and self.path.is_file():
+                records, good = _parse_lines(self.path)
+                size = self.path.stat().st_size
+                if good < size:  # cut the torn last line
+                    self.torn_bytes = size - good
+                    with open(self.path, "r+b") as fh:
+                        fh.truncate(good)
+                        fh.flush()
+                        os.fsync(fh.fileno())
+                for rec in records:
+                    self._latest[str(rec.get("input"))] = rec
+            self._fh = open(self.path, "a" if self.resume else "w", encoding="utf-8")
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+        if self._lock_fd is not None:
+            fcntl.flock(self._lock_fd, fcntl.LOCK_UN)
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
+    def latest(self, input: str) -> dict[str, Any] | None:
+        """The latest record of ``input`` (its resolved path), or None."""
+        return self._latest.get(input)
+
+    def is_done(self, key: InputKey) -> bool:
+        """Whether ``key``'s input has a final record (``ok`` or ``error``) with this key."""
+        rec = self._latest.get(key.input)
+        if rec is None or rec.get("status") not in FINAL_STATUSES:
+            return False
+        return all(rec.get(k) == v for k, v in key.as_dict().items())
+
+    def append(self, record: Mapping[str, Any]) -> None:
+        """Write one record as a line, flushed and fsync-ed before returning."""
+        if self._fh is None:
+            raise InputFileError(f"results: {str(self.path)!r} is not open")
+        try:
+            line = json.dumps(record, allow_nan=False, default=str)
+        except ValueError:  # NaN or inf somewhere: written as null
+            line = json.dumps(to_jsonable(dict(record)), allow_nan=False, default=str)
+        self._fh.write(line + "\n")
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self._latest[str(record.get("input"))] = dict(record)

@@ -1,0 +1,88 @@
+"""One input of a dataset run, as a worker runs it: read, build, solve, draw.
+
+:func:`run_task` is the function the engines call (in the driver for the serial engine,
+on a Dask worker otherwise). It never raises for a bad input: a
+:class:`~torchsym.errors.TorchsymError` or any other exception becomes an ``"error"``
+outcome, final and recorded. Only the death of the process (a crash) escapes it, and the
+engine tells that apart.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+__all__ = ["TaskSpec", "run_task"]
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskSpec:
+    """Everything a worker needs for one input (plain Python, cheap to send).
+
+    Attributes:
+        index: the input's position in the run.
+        input: the input file, resolved path.
+        config: the pipeline config as :meth:`PipelineConfig.to_dict` gives it, with the
+            run's overrides applied.
+        threads: ``torch.set_num_threads`` for the solve.
+        figures_dir: folder for the result's pictures, or None for none.
+        stem: file-name stem of the pictures.
+        imports: modules imported before the config is read (they register solvers).
+    """
+
+    index: int
+    input: str
+    config: dict[str, Any]
+    threads: int = 1
+    figures_dir: str | None = None
+    stem: str = ""
+    imports: tuple[str, ...] = ()
+
+
+def _error(exc: BaseException) -> dict[str, Any]:
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f"{Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+    return {"type": type(exc).__name__, "message": str(exc), "where": where}
+
+
+def run_task(spec: TaskSpec) -> dict[str, Any]:
+    """Run one input; returns ``{"status", "kind", "result", "error", "seconds", "artifacts"}``.
+
+    ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``) or
+    ``"error"`` (``error`` is ``{"type", "message", "where"}``). ``seconds`` is the wall
+    time of reading, building and solving (pictures excluded).
+    """
+    import torch
+
+    if torch.get_num_threads() != spec.threads:
+        torch.set_num_threads(spec.threads)
+    out: dict[str, Any] = {"status": "error", "kind": None, "result": None, "error": None, "seconds": 0.0, "artifacts": []}
+    t0 = time.perf_counter()
+    try:
+        for name in spec.imports:
+            importlib.import_module(name)
+        from torchsym.api import prepare
+        from torchsym.core.config import build_pipeline, load_config
+
+        cfg = load_config(spec.config)
+        kind, data, cfg = prepare(spec.input, cfg)
+        out["kind"] = kind
+        result = build_pipeline(cfg)(data)
+        out["seconds"] = time.perf_counter() - t0
+        out["result"] = result.to_dict()
+        if spec.figures_dir is not None:
+            from torchsym.viz import write_artifacts
+
+            folder = Path(spec.figures_dir)
+            folder.mkdir(parents=True, exist_ok=True)
+            out["artifacts"] = [str(p) for p in write_artifacts(result, data, folder, spec.stem)]
+        out["status"] = "ok"
+    except Exception as exc:  # every exception is the input's final outcome, recorded
+        out["seconds"] = time.perf_counter() - t0
+        out["result"] = None
+        out["error"] = _error(exc)
+    return out
