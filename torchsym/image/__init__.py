@@ -12,3 +12,6 @@ __all__: list[str] = [
     "boundary_clique_axes",
     "ksymmetry_axes",
 ]
+from torchsym.image.targets import axis_heatmap, orientation_bins, orientation_labels, segment_distance  # noqa: E402
+
+__all__ += ["axis_heatmap", "orientation_bins", "orientation_labels", "segment_distance"]
