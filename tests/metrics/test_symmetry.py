@@ -27,7 +27,8 @@ class TestDenseSymmetryError:
         n, b = torch.randn(2, 2, 3, dtype=torch.float64), torch.randn(2, 2, dtype=torch.float64)
         e = dense_symmetry_error(p, n, b, n, b)
         assert torch.diagonal(e, dim1=1, dim2=2).abs().max() < 1e-12
-        assert torch.allclose(dense_symmetry_error(3 * p, n, 3 * b, n.flip(1), 3 * b.flip(1)), dense_symmetry_error(p, n, b, n.flip(1), b.flip(1)))
+        scaled = dense_symmetry_error(3 * p, n, 3 * b, n.flip(1), 3 * b.flip(1))
+        assert torch.allclose(scaled, dense_symmetry_error(p, n, b, n.flip(1), b.flip(1)))
 
     def test_gradcheck(self):
         p = torch.randn(1, 6, 3, dtype=torch.float64)

@@ -48,7 +48,8 @@ def reflect_volume(
         A volume symmetric about the plane is returned unchanged (up to interpolation).
     """
     if not isinstance(volume, torch.Tensor) or volume.dim() not in (4, 5):
-        raise InputShapeError(f"volume: expected (B, C, G1, G2) or (B, C, G1, G2, G3), got {getattr(volume, 'shape', type(volume).__name__)}")
+        got = getattr(volume, "shape", type(volume).__name__)
+        raise InputShapeError(f"volume: expected (B, C, G1, G2) or (B, C, G1, G2, G3), got {got}")
     d = volume.dim() - 2
     b = volume.shape[0]
     if not isinstance(normal, torch.Tensor) or normal.shape != (b, d):

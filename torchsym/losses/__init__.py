@@ -12,12 +12,16 @@ from kornia.losses import BinaryFocalLossWithLogits, binary_focal_loss_with_logi
 
 from torchsym.losses.field import field_symmetry_loss
 from torchsym.losses.flip import flip_consistency_loss, orientation_flip_permutation
+from torchsym.losses.modules import OrthogonalityLoss, PRSNetSymmetryLoss, SymmetryDistanceLoss
 from torchsym.losses.prsnet import closest_point_grid, grid_cell_index, occupancy_grid, prsnet_symmetry_loss
 from torchsym.losses.regularizers import orthogonality_loss
 from torchsym.losses.symmetry_distance import nearest_neighbours, reflect_batch, robust_kernel, symmetry_distance
 
 __all__ = [
     "BinaryFocalLossWithLogits",
+    "OrthogonalityLoss",
+    "PRSNetSymmetryLoss",
+    "SymmetryDistanceLoss",
     "binary_focal_loss_with_logits",
     "closest_point_grid",
     "field_symmetry_loss",

@@ -16,7 +16,8 @@ def check_points(points: torch.Tensor, mask: torch.Tensor | None, name: str = "p
     if mask is None:
         return torch.ones(points.shape[:2], dtype=points.dtype, device=points.device)
     if not isinstance(mask, torch.Tensor) or mask.shape != points.shape[:2]:
-        raise InputShapeError(f"mask: expected {tuple(points.shape[:2])} to match {name}, got {getattr(mask, 'shape', type(mask).__name__)}")
+        got = getattr(mask, "shape", type(mask).__name__)
+        raise InputShapeError(f"mask: expected {tuple(points.shape[:2])} to match {name}, got {got}")
     return mask.to(points.dtype)
 
 

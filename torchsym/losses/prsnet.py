@@ -102,7 +102,8 @@ def prsnet_symmetry_loss(
     check_reduction(reduction)
     g = occupancy.shape[-1] if isinstance(occupancy, torch.Tensor) and occupancy.dim() > 1 else 0
     if g < 1 or occupancy.shape != (b, *([g] * d)):
-        raise InputShapeError(f"occupancy: expected (B, G, ..., G) with {d} grid axes and B = {b}, got {tuple(getattr(occupancy, 'shape', ()))}")
+        got = tuple(getattr(occupancy, "shape", ()))
+        raise InputShapeError(f"occupancy: expected (B, G, ..., G) with {d} grid axes and B = {b}, got {got}")
     if closest_points.shape != (*occupancy.shape, d):
         raise InputShapeError(f"closest_points: expected {(*occupancy.shape, d)}, got {tuple(closest_points.shape)}")
     if not bound > 0:
