@@ -48,3 +48,11 @@ class TestReflectVolume:
     def test_exception(self):
         with pytest.raises(InputShapeError, match="normal: expected \\(1, 3\\)"):
             reflect_volume(torch.ones(1, 1, 2, 2, 2), torch.ones(1, 2), torch.zeros(1))
+
+
+def test_bfloat16():
+    v = _sdf((8, 8, 8), [0.1, 0.0, 0.0]).float()
+    n, b = torch.tensor([[1.0, 0.2, 0.0]]), torch.tensor([0.02])
+    out = reflect_volume(v.bfloat16(), n.bfloat16(), b.bfloat16())
+    assert out.dtype == torch.bfloat16
+    assert torch.allclose(out.float(), reflect_volume(v, n, b), atol=0.03)

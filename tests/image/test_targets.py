@@ -86,3 +86,10 @@ class TestOrientationLabels:
     def test_exception(self):
         with pytest.raises(InputValueError, match="width: expected"):
             orientation_labels(SEGS, (4, 4), width=0.0)
+
+
+@pytest.mark.parametrize("mode", ["gaussian", "pmcnet", "equisym"])
+def test_bfloat16(mode):
+    out = axis_heatmap(SEGS.bfloat16(), (12, 16), mode=mode)
+    assert out.dtype == torch.bfloat16
+    assert torch.allclose(out.float(), axis_heatmap(SEGS, (12, 16), mode=mode), atol=0.02)

@@ -112,3 +112,13 @@ class TestPRSNetLoss:
             prsnet_symmetry_loss(p, n, b, cp, occ[:, 0])
         with pytest.raises(InputShapeError, match="closest_points: expected"):
             prsnet_symmetry_loss(p, n, b, cp[..., :2], occ)
+
+
+def test_bfloat16():
+    p = _shape(2, 100, dtype=torch.float32)
+    cp, occ = closest_point_grid(p, 8), occupancy_grid(p, 8)
+    n, b = torch.randn(2, 2, 3), torch.zeros(2, 2)
+    ref = prsnet_symmetry_loss(p, n, b, cp, occ)
+    bf = torch.bfloat16
+    out = prsnet_symmetry_loss(p.to(bf), n.to(bf), b.to(bf), cp.to(bf), occ.to(bf))
+    assert out.dtype == bf and torch.allclose(out.float(), ref, rtol=0.1, atol=0.05)
