@@ -2,8 +2,9 @@
 
 Conventions: points ``(B, N, D)`` with a ``(B, N)`` mask of real points; planes as
 ``normal (B, K, D)`` and ``offset (B, K)`` (``n . x + b = 0``); losses return ``(B, K)``
-or ``(B,)`` with ``reduction="none"``. No host syncs on CPU-free paths; formulas and
-their sources in ``docs/design/losses.md``. Focal loss is kornia's
+or ``(B,)`` with ``reduction="none"``. Nothing on the loss path reads a device tensor
+back to the host (the kd-tree is used for CPU tensors only); formulas and their sources
+in ``docs/design/losses.md``. Focal loss is kornia's
 (:func:`binary_focal_loss_with_logits`, re-exported), which is EquiSym's
 ``sigmoid_focal_loss`` (``ahyunSeo/EquiSym`` ``utils.py``) with the same alpha and gamma.
 """
