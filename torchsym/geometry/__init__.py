@@ -38,3 +38,29 @@ __all__ = [
     "spread_normals",
     "tangent_basis",
 ]
+
+from torchsym.geometry.cone import sample_cone  # noqa: E402
+from torchsym.geometry.conventions import (  # noqa: E402
+    check_planes,
+    planes_from_nerd,
+    planes_from_prsnet,
+    planes_to_nerd,
+    planes_to_prsnet,
+)
+from torchsym.geometry.plane_votes import PlaneClusters, cluster_planes, pair_planes, plane_vote_distance  # noqa: E402
+from torchsym.geometry.volume import grid_cell_centres, reflect_volume  # noqa: E402
+
+__all__ += [
+    "PlaneClusters",
+    "check_planes",
+    "cluster_planes",
+    "grid_cell_centres",
+    "pair_planes",
+    "planes_from_nerd",
+    "planes_from_prsnet",
+    "planes_to_nerd",
+    "planes_to_prsnet",
+    "plane_vote_distance",
+    "reflect_volume",
+    "sample_cone",
+]

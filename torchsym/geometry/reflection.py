@@ -36,10 +36,19 @@ __all__ = [
 ]
 
 
+def _check_nonzero(norm: torch.Tensor, message: str) -> None:
+    """Raise on a zero normal when that costs no host sync: only for CPU tensors outside
+    ``torch.compile``. On an accelerator the check is skipped (a zero normal gives NaN),
+    so a training loop never waits on the device."""
+    if norm.device.type != "cpu" or torch.compiler.is_compiling():
+        return
+    if bool((norm == 0).any()):
+        raise InputValueError(message)
+
+
 def _unit(normal: torch.Tensor, offset: torch.Tensor | None = None):
     norm = normal.norm(dim=-1, keepdim=True)
-    if bool((norm == 0).any()):
-        raise InputValueError("normal: expected a non-zero vector, got a zero vector")
+    _check_nonzero(norm, "normal: expected a non-zero vector, got a zero vector")
     if offset is None:
         return normal / norm, None
     return normal / norm, offset / norm.squeeze(-1)
@@ -307,8 +316,7 @@ def plane_distance(
     for name, nrm in (("normal_a", normal_a), ("normal_b", normal_b)):
         if not isinstance(nrm, torch.Tensor) or nrm.dim() < 1 or nrm.shape[-1] < 2:
             raise InputShapeError(f"{name}: expected a (..., D) tensor with D >= 2, got {getattr(nrm, 'shape', type(nrm).__name__)}")
-        if bool((nrm.norm(dim=-1) == 0).any()):
-            raise InputValueError(f"{name}: expected non-zero normals, got a zero vector")
+        _check_nonzero(nrm.norm(dim=-1), f"{name}: expected non-zero normals, got a zero vector")
     if normal_a.shape[-1] != normal_b.shape[-1]:
         raise InputShapeError(f"normal_b: expected (..., {normal_a.shape[-1]}) like normal_a, got {tuple(normal_b.shape)}")
     if point is not None and not isinstance(point, torch.Tensor):

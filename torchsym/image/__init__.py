@@ -23,3 +23,6 @@ __all__: list[str] = [
     "PointSymmImageSettings",
     "point_symm_image",
 ]
+from torchsym.image.targets import axis_heatmap, orientation_bins, orientation_labels, segment_distance  # noqa: E402
+
+__all__ += ["axis_heatmap", "orientation_bins", "orientation_labels", "segment_distance"]
