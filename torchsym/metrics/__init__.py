@@ -5,3 +5,4 @@ from torchsym.metrics.pr import *  # noqa: F401,F403
 from torchsym.metrics.pointset import *  # noqa: F401,F403
 from torchsym.metrics.mesh import *  # noqa: F401,F403
 from torchsym.metrics.axes import *  # noqa: F401,F403
+from torchsym.metrics.symmetry_map import *  # noqa: F401,F403

@@ -63,4 +63,4 @@ def _load_writers() -> None:
 
 
 #: writer modules, one per family of results
-_MODULES: tuple[str, ...] = ()
+_MODULES: tuple[str, ...] = ("symmetry_map",)

@@ -69,13 +69,16 @@ def cover_greedy(agree: torch.Tensor, k: int, min_support: int = 1) -> list[int]
     """Greedy maximum coverage: ``k`` rows of ``agree (P, P)`` covering the most columns.
 
     Each round takes the set adding the most uncovered pairs (ties: the lowest index);
-    stops early when no set adds ``min_support`` pairs.
+    stops early when no set adds ``min_support`` pairs. The set of a pair that a chosen set
+    already covers is not offered again: it is the same axis found twice (without this
+    rule a near-copy of the first set, adding the few pairs at the edge of its
+    tolerance, would be the second axis).
     """
     chosen: list[int] = []
     uncovered = torch.ones(agree.shape[1], dtype=torch.bool, device=agree.device)
     counts_all = agree.float()
     for _ in range(k):
-        gain = counts_all @ uncovered.float()  # (P,)
+        gain = (counts_all @ uncovered.float()).masked_fill(~uncovered, -1.0)  # (P,)
         best = int(gain.argmax())
         if gain[best] < min_support:
             break

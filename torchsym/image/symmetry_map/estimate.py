@@ -118,7 +118,7 @@ def cluster_field(
         left_index = grid_index(desc, left)
         for _ in range(pm.max_iters):
             state = patchmatch_iteration(
-                state, desc, left_index, normal, radius, pm.n_samples, generator, neighbours=pm.neighbours
+                state, desc, left_index, normal, radius, pm.n_samples, generator, neighbours=pm.neighbours, min_gain=pm.min_gain
             )
             if history is not None:
                 history.append(expand_field(desc, state, normal)[0])

@@ -133,9 +133,9 @@ def _claim(best: torch.Tensor, cost: torch.Tensor) -> FieldState:
     return FieldState(torch.where(take, winner, best), torch.where(take, incoming, cost))
 
 
-def _keep_better(best: torch.Tensor, best_cost: torch.Tensor, cand: torch.Tensor, desc: DenseDescriptors):
+def _keep_better(best: torch.Tensor, best_cost: torch.Tensor, cand: torch.Tensor, desc: DenseDescriptors, margin: float = 0.0):
     c = candidate_cost(desc, cand)
-    better = c < best_cost
+    better = c < best_cost - margin
     return torch.where(better, cand, best), torch.where(better, c, best_cost)
 
 
@@ -164,6 +164,7 @@ def patchmatch_iteration(
     generator: torch.Generator,
     *,
     neighbours: bool = True,
+    min_gain: float = 0.0,
 ) -> FieldState:
     """One IRS iteration over all grid points: propagation (Eq. 3.3), random search (Eq. 3.4),
     symmetric update (Eqs. 3.5-3.6).
@@ -177,6 +178,8 @@ def patchmatch_iteration(
         n_samples: the random-search samples ``e``.
         generator: the source of randomness (``torch.Generator``).
         neighbours: also propagate from the 4 grid neighbours.
+        min_gain: a random-search sample replaces the estimate only when it lowers the
+            cost by more than this.
     """
     n = state.field.shape[0]
     device = desc.values.device
@@ -195,7 +198,7 @@ def patchmatch_iteration(
         rho = 1 + (radius - 1) * torch.rand(n, generator=generator).to(device)
         psi = 2 * math.pi * torch.rand(n, generator=generator).to(device)
         cand = grid_index(desc, centre + torch.stack([rho * torch.cos(psi), rho * torch.sin(psi)], 1))
-        best, best_cost = _keep_better(best, best_cost, cand, desc)
+        best, best_cost = _keep_better(best, best_cost, cand, desc, min_gain)
     return _claim(best, best_cost)
 
 
