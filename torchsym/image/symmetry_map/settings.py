@@ -74,9 +74,9 @@ class PatchMatchSettings(Settings):
 class ScoreSettings(Settings):
     """The symmetry score, Eqs. 3.7-3.8."""
 
-    sigma_feature: float = setting(1.0, "S = exp(-|d_p - m_q|^2 / sigma_feature^2) ... (thesis: 1)", low=0.0, low_open=True)
+    sigma_feature: float = setting(0.4, "S = exp(-|d_p - m_q|^2 / sigma_feature^2) ... (thesis: 1)", low=0.0, low_open=True)
     sigma_d: float = setting(
-        0.15, "... x exp(-dist(p, I)^2 / ((w^2 + h^2) sigma_d^2)), dist to the cluster's pixels", unit="x diagonal", low=0.0, low_open=True
+        0.1, "... x exp(-dist(p, I)^2 / ((w^2 + h^2) sigma_d^2)), dist to the cluster's pixels", unit="x diagonal", low=0.0, low_open=True
     )
 
 
