@@ -18,8 +18,8 @@ Where this departs from the thesis (each measured in ``docs/design/symmetry_map.
   ``|d1 - d2| <= clustering.tol_px`` also agrees; the greedy cover does not offer the set
   of a pair already covered (the same axis twice);
 - PatchMatch runs on every ``patchmatch.stride``-th pixel (default 2), the field elsewhere
-  following by symmetry coherency (Sec. 3.2.1); it adds PatchMatch's propagation from the
-  4 grid neighbours (``patchmatch.neighbours``) and moves all pixels at once;
+  following by symmetry coherency (Sec. 3.2.1), and moves all pixels at once; PatchMatch's
+  own propagation from the 4 grid neighbours is an option (``patchmatch.neighbours``, off);
 - the score's ``sigma_feature`` 0.4 (thesis 1) and ``sigma_d`` 0.1 (thesis: unstated).
 """
 

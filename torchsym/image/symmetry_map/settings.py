@@ -61,7 +61,7 @@ class PatchMatchSettings(Settings):
     )
     max_iters: int = setting(6, "IRS iterations", low=1)
     stride: int = setting(2, "the field is searched on every stride-th pixel, elsewhere it follows by symmetry coherency (1: every pixel)", unit="px", low=1)
-    neighbours: bool = setting(True, "also propagate from the 4 grid neighbours (PatchMatch's own step; not in Algorithm 3)")
+    neighbours: bool = setting(False, "also propagate from the 4 grid neighbours (PatchMatch's own step; not in Algorithm 3)")
     n_samples: int = setting(15, "random-search samples per pixel and iteration (the thesis's e)", low=0)
     radius: float | None = setting(
         None, "random-search radius r; None: the spread of a pixel's reflections through the cluster's pairs", unit="px", low=1.0
