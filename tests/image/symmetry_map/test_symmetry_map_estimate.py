@@ -114,3 +114,9 @@ def test_real_photo_crop(shared_data):
     r = symmetry_map(d["image"], n_axes=1)
     rate = correspondence_rate(r.nmrf[0], d["nmrf"], d["mask"], (5,))
     assert float(rate[0]) >= 0.6
+
+
+@pytest.mark.slow
+def test_axes_count_from_detector(mirrored):
+    r = symmetry_map(mirrored["image"], patchmatch={"max_iters": 1})
+    assert len(r) >= 1 and "axes_count" in r.seconds

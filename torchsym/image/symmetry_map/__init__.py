@@ -20,6 +20,8 @@ Where this departs from the thesis (each measured in ``docs/design/symmetry_map.
 - PatchMatch runs on every ``patchmatch.stride``-th pixel (default 2), the field elsewhere
   following by symmetry coherency (Sec. 3.2.1), and moves all pixels at once; PatchMatch's
   own propagation from the 4 grid neighbours is an option (``patchmatch.neighbours``, off);
+  a random-search sample must lower the cost by ``patchmatch.min_gain`` (0.2; thesis: any
+  decrease), which stops the search drifting where the cost is flat;
 - the score's ``sigma_feature`` 0.4 (thesis 1) and ``sigma_d`` 0.1 (thesis: unstated).
 """
 

@@ -66,7 +66,7 @@ class PatchMatchSettings(Settings):
     radius: float | None = setting(
         None, "random-search radius r; None: the spread of a pixel's reflections through the cluster's pairs", unit="px", low=1.0
     )
-    min_gain: float = setting(0.0, "a random-search sample must lower the cost |d_p - m_q|^2 by more than this (thesis: 0)", low=0.0)
+    min_gain: float = setting(0.2, "a random-search sample must lower the cost |d_p - m_q|^2 by more than this (thesis: 0)", low=0.0)
     max_bmp_pairs: int = setting(64, "the most cluster pairs whose reflections BMP and MMP use", low=1)
 
 
