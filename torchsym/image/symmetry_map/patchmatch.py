@@ -16,7 +16,8 @@ Every step works on all grid points at once:
   axis (the symmetry coherency of Sec. 3.2.1);
 - *random search* (Eq. 3.4): ``e`` samples at distance ``rho ~ U(1, r)`` and angle
   ``psi ~ U(0, 2 pi)`` around the best so far, one sample index at a time over all points
-  (a loop of ``e``, never over pixels);
+  (a loop of ``e``, never over pixels); a sample replaces the estimate when it lowers the
+  cost by more than ``min_gain`` (the thesis: by anything);
 - *update* (Eqs. 3.5-3.6): ``f(p) = q`` and ``f(q) = p`` where that lowers ``q``'s cost.
   All points move at once (Jacobi order, not the thesis's pixel by pixel); when several
   ``p`` claim one ``q`` the lowest cost wins, ties to the highest index, so the result is
