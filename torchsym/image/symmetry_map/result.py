@@ -103,6 +103,7 @@ class StylizedResult(Result):
             "image_size": list(self.image.shape[-2:]),
             "n_superpixels": self.n_superpixels,
             "n_regions": int(self.region_scores.numel()),
-            "region_scores": to_jsonable(self.region_scores),
+            "min_region_score": float(self.region_scores.min()) if self.region_scores.numel() else None,
+            "mean_region_score": float(self.region_scores.mean()) if self.region_scores.numel() else None,
             "notes": list(self.notes),
         }
