@@ -5,6 +5,7 @@ from torchsym.image.ksymmetry import KSymmetryDetector, KSymmetrySettings, ksymm
 from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult
 from torchsym.image.symmslic import SymmSlic, SymmSlicResult, symm_slic
 from torchsym.image.pointsymm_axis import ImageAxisResult, PointSymmImage, PointSymmImageSettings, point_symm_image
+from torchsym.image.symmetry_map import StylizeSolver, SymmetryMapResult, SymmetryMapSolver, stylize, symmetry_map
 
 __all__: list[str] = [
     "BoundaryCliqueDetector",
@@ -22,6 +23,11 @@ __all__: list[str] = [
     "PointSymmImage",
     "PointSymmImageSettings",
     "point_symm_image",
+    "StylizeSolver",
+    "SymmetryMapResult",
+    "SymmetryMapSolver",
+    "stylize",
+    "symmetry_map",
 ]
 from torchsym.image.targets import axis_heatmap, orientation_bins, orientation_labels, segment_distance  # noqa: E402
 
