@@ -41,7 +41,7 @@ from torchsym.image.symmetry_map import SymmetryMapSettings, symmetry_map
 from torchsym.image.symmetry_map.estimate import cluster_field
 from torchsym.image.synthetic import mirrored_photo
 from torchsym.io import read_image
-from torchsym.metrics.symmetry_map import correspondence_rate, reconstruction_quality, ssm_scores
+from torchsym.metrics.symmetry_map import nmrf_correspondence_rate, reconstruction_quality, ssm_scores
 
 HERE = Path(__file__).resolve().parent
 TAUS = (1, 2, 3, 4, 5, 6, 8, 10, 15, 20)
@@ -81,7 +81,7 @@ def run_synthetic(n: int, photos: str, n_three: int) -> dict:
             nmrf, sc, _ = cluster_field(res.image[None], pairs, settings.replace({"patchmatch.scheme": s}), torch.Generator().manual_seed(0))
             fields[s] = (nmrf, sc)
         for s, (nmrf, sc) in fields.items():
-            rates[s].append(correspondence_rate(nmrf, truth, mask, TAUS).tolist())
+            rates[s].append(nmrf_correspondence_rate(nmrf, truth, mask, TAUS).tolist())
             quality[s].append(reconstruction_quality(img, nmrf, sc, mask))
             ssm[s].append(ssm_scores(sc, mask))
         history: list[torch.Tensor] = []

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 import torchsym
 from torchsym.errors import TorchsymError
 from torchsym.io import IMAGE_SUFFIXES, MESH_SUFFIXES, POINT_SUFFIXES, load_input, read_image, read_mesh, read_pointcloud
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 
 
 def _fuzz(n: int) -> settings:

@@ -26,8 +26,12 @@ from torchsym.image import *  # noqa: F401,F403  (every solver importable from t
 from torchsym.mesh import *  # noqa: F401,F403
 from torchsym.pointcloud import *  # noqa: F401,F403
 from torchsym.pointset import *  # noqa: F401,F403
+from torchsym.multiview import MultiviewPlaneDetector, MultiviewPlaneResult, MultiviewPlaneSettings  # noqa: F401
 
 __all__ = [
+    "MultiviewPlaneDetector",
+    "MultiviewPlaneResult",
+    "MultiviewPlaneSettings",
     "SOLVERS",
     "ConfigError",
     "InputFileError",

@@ -77,7 +77,7 @@ def detect(
         kind: force the input kind (e.g. ``"pointcloud"`` to treat a mesh's vertices as
             a point cloud).
         **overrides: settings of the pipeline's last solver, checked against its
-            signature (e.g. ``n_init_samples=800``).
+            signature (e.g. ``**{"init.n_samples": 800}``).
 
     Raises:
         TorchsymError: a bad input, config or setting; a solver's refusal of a file's

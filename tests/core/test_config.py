@@ -26,7 +26,7 @@ class TestConfigs:
     def test_every_config_builds(self, path):
         pipe = build_pipeline(path)
         assert len(pipe.steps) >= 1
-        assert pipe.input_kind in ("pointcloud", "points", "image", "mesh")
+        assert pipe.input_kind in ("pointcloud", "points", "image", "mesh", "multiview")
 
 
 class TestLoadConfig:

@@ -7,7 +7,7 @@ import torch
 from torchsym.errors import InputFileError, InputValueError
 from torchsym.io import load_input, read_mesh, read_pointcloud, write_mesh
 from torchsym.io.meshfiles import parse_mesh_file
-from torchsym.mesh.mesh import Mesh
+from torchsym.geometry.mesh import Mesh
 
 # an octahedron: 6 vertices, 8 triangles
 _V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=np.float64)

@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from torchsym.errors import InputShapeError, InputValueError
-from torchsym.metrics.symmetry_map import correspondence_rate, reconstruct_mirror, reconstruction_quality, ssm_scores
+from torchsym.metrics.symmetry_map import nmrf_correspondence_rate, reconstruct_mirror, reconstruction_quality, ssm_scores
 
 
 def _identity(h, w):
@@ -21,18 +21,18 @@ class TestCorrespondenceRate:
         est[0, 0] += torch.tensor([3.0, 4.0])  # error 5
         est[0, 1] += torch.tensor([1.0, 0.0])  # error 1
         mask = torch.tensor([[True, True], [True, False]])
-        rate = correspondence_rate(est, truth, mask, (0.5, 1.0, 1.5, 5.0, 5.5))
+        rate = nmrf_correspondence_rate(est, truth, mask, (0.5, 1.0, 1.5, 5.0, 5.5))
         assert rate.tolist() == pytest.approx([1 / 3, 1 / 3, 2 / 3, 2 / 3, 1.0])
 
     def test_empty_mask(self):
         f = _identity(2, 2)
-        assert correspondence_rate(f, f, torch.zeros(2, 2, dtype=torch.bool), (1,)).tolist() == [0.0]
+        assert nmrf_correspondence_rate(f, f, torch.zeros(2, 2, dtype=torch.bool), (1,)).tolist() == [0.0]
 
     def test_exception(self):
         with pytest.raises(InputShapeError, match="nmrf"):
-            correspondence_rate(torch.zeros(2, 2), torch.zeros(2, 2, 2), torch.ones(2, 2, dtype=torch.bool))
+            nmrf_correspondence_rate(torch.zeros(2, 2), torch.zeros(2, 2, 2), torch.ones(2, 2, dtype=torch.bool))
         with pytest.raises(InputValueError, match="mask"):
-            correspondence_rate(torch.zeros(2, 2, 2), torch.zeros(2, 2, 2), torch.ones(2, 2))
+            nmrf_correspondence_rate(torch.zeros(2, 2, 2), torch.zeros(2, 2, 2), torch.ones(2, 2))
 
 
 class TestReconstruction:

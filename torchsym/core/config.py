@@ -7,7 +7,7 @@ solver and its settings::
     steps:
       - name: reflection_plane
         params:
-          n_init_samples: 500
+          init: {n_samples: 500}
 
 Every key is checked before anything is built: unknown top-level keys, unknown solver
 names and parameters that the solver's constructor does not take are reported with the
@@ -25,7 +25,6 @@ import yaml
 from torch import nn
 
 from torchsym.core.registry import INPUT_KINDS, SOLVERS, SolverEntry
-from torchsym.core.settings import Solver
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 
 __all__ = ["Pipeline", "PipelineConfig", "StepConfig", "build_pipeline", "default_config", "load_config", "load_yaml"]
@@ -215,11 +214,7 @@ class Pipeline(nn.Module):
         for i, s in enumerate(config.steps):
             entry = SOLVERS.get(s.name)
             try:
-                settings = entry.settings(s.params)
-                if issubclass(entry.cls, Solver):
-                    steps.append(entry.cls(settings))
-                else:  # TRANSITION: removed once every solver is a Solver
-                    steps.append(entry.cls(**settings.to_dict()))
+                steps.append(entry.cls(entry.settings(s.params)))
             except TorchsymError as exc:
                 raise ConfigError(f"{config.source}: steps[{i}] ({s.name}): {exc}") from None
         self.steps = nn.ModuleList(steps)

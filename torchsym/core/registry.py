@@ -49,9 +49,7 @@ class SolverEntry:
     @property
     def settings_class(self) -> type[Settings]:
         """The solver's :class:`~torchsym.core.settings.Settings` class."""
-        if issubclass(self.cls, Solver):
-            return self.cls.settings_class
-        return _legacy_settings(self.cls)  # TRANSITION: removed once every solver is a Solver
+        return self.cls.settings_class
 
     def parameters(self) -> list[str]:
         """The names of the solver's top-level settings (groups by their own name)."""
@@ -69,16 +67,6 @@ class SolverEntry:
             raise ConfigError(f"{where}: solver {self.name!r}: {exc}" if where else f"solver {self.name!r}: {exc}") from None
 
 
-def _legacy_settings(cls: type) -> type[Settings]:
-    sig = inspect.signature(cls.__init__)
-    fields = [
-        (k, Any, dataclasses.field(default=p.default))
-        for k, p in sig.parameters.items()
-        if k != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty
-    ]
-    return dataclasses.make_dataclass(f"{cls.__name__}Settings", fields, bases=(Settings,), frozen=True)
-
-
 class Registry:
     """Maps short names to solver classes, with one default solver per input kind."""
 
@@ -93,6 +81,8 @@ class Registry:
             raise ValueError(f"kind: expected one of {sorted(INPUT_KINDS)}, got {kind!r}")
 
         def deco(cls: T) -> T:
+            if not (isinstance(cls, type) and issubclass(cls, Solver)) or cls.settings_class is Settings:
+                raise TypeError(f"{name}: a registered solver must subclass Solver and set settings_class")
             if name in self._entries and self._entries[name].cls is not cls:
                 raise ValueError(f"{self.what} {name!r} is already registered to {self._entries[name].cls.__name__}")
             doc = (inspect.getdoc(cls) or "").strip().splitlines()

@@ -106,19 +106,6 @@ def mirrored_objects_image(
     return image, torch.tensor(axes, dtype=torch.float32)
 
 
-def mirrored_texture_image(
-    *,
-    height: int = 480,
-    width: int = 640,
-    angle: float | None = None,
-    generator: torch.Generator | None = None,
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """A whole image mirror symmetric about a line through its centre: a smooth random
-    texture with shapes on one side, reflected onto the other.
-
-    Args:
-        height, width: image size in pixels.
-        angle: the axis normal's angle in degrees; None draws it at random.
 def _photo_crop(rng: np.random.Generator, photos: list, height: int, width: int, zoom: tuple[float, float] = (1.0, 1.6)) -> np.ndarray:
     """A random ``(height, width, 3)`` float crop of a random photo magnified by ``zoom``, or a synthetic texture."""
     import cv2
@@ -181,27 +168,6 @@ def mirrored_photo(
             generator seeded with 0, so the same call gives the same bits.
 
     Returns:
-        ``image (3, H, W)`` float in [0, 1] and ``axis (3,)`` float64 ``(n_x, n_y,
-        offset)``: the axis is ``n . (x, y) + offset = 0`` in pixels.
-    """
-    import cv2
-
-    rng = numpy_rng(generator)
-    base = cv2.resize(rng.random((height // 24 + 2, width // 24 + 2, 3)).astype(np.float32), (width, height), interpolation=cv2.INTER_CUBIC)
-    base = np.clip(base, 0, 1)
-    for _ in range(12):
-        colour = tuple(float(v) for v in rng.random(3))
-        x, y, r = int(rng.integers(0, width)), int(rng.integers(0, height)), int(rng.integers(8, 40))
-        cv2.circle(base, (x, y), r, colour, -1) if rng.random() < 0.5 else cv2.rectangle(base, (x, y), (x + r, y + 2 * r), colour, -1)
-    t = math.radians(rng.uniform(0, 180) if angle is None else angle)
-    n = np.array([math.cos(t), math.sin(t)])
-    b = -float(n @ [(width - 1) / 2, (height - 1) / 2])
-    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
-    d = xs * n[0] + ys * n[1] + b
-    mx, my = (xs - 2 * d * n[0]).astype(np.float32), (ys - 2 * d * n[1]).astype(np.float32)
-    mirrored = cv2.remap(base, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
-    img = np.where((d > 0)[..., None], mirrored, base)
-    return torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1))).float(), torch.tensor([n[0], n[1], b], dtype=torch.float64)
         ``image (3, H, W)`` float in [0, 1]; ``nmrf (H, W, 2)`` float ``(x, y)`` of each
         pixel's mirror; ``mask (H, W)`` bool, the object pixels whose mirror lies in the
         object; ``line (3,)`` the axis ``a x + b y + c = 0`` before the warp.
@@ -275,3 +241,43 @@ def mirrored_photo(
         "mask": torch.from_numpy(valid),
         "line": torch.from_numpy(line).float(),
     }
+
+
+def mirrored_texture_image(
+    *,
+    height: int = 480,
+    width: int = 640,
+    angle: float | None = None,
+    generator: torch.Generator | None = None,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """A whole image mirror symmetric about a line through its centre: a smooth random
+    texture with shapes on one side, reflected onto the other.
+
+    Args:
+        height, width: image size in pixels.
+        angle: the axis normal's angle in degrees; None draws it at random.
+        generator: the source of randomness (``torch.Generator``); None uses a fresh
+            generator seeded with 0, so the same call gives the same bits.
+
+    Returns:
+        ``image (3, H, W)`` float in [0, 1] and ``axis (3,)`` float64 ``(n_x, n_y,
+        offset)``: the axis is ``n . (x, y) + offset = 0`` in pixels.
+    """
+    import cv2
+
+    rng = numpy_rng(generator)
+    base = cv2.resize(rng.random((height // 24 + 2, width // 24 + 2, 3)).astype(np.float32), (width, height), interpolation=cv2.INTER_CUBIC)
+    base = np.clip(base, 0, 1)
+    for _ in range(12):
+        colour = tuple(float(v) for v in rng.random(3))
+        x, y, r = int(rng.integers(0, width)), int(rng.integers(0, height)), int(rng.integers(8, 40))
+        cv2.circle(base, (x, y), r, colour, -1) if rng.random() < 0.5 else cv2.rectangle(base, (x, y), (x + r, y + 2 * r), colour, -1)
+    t = math.radians(rng.uniform(0, 180) if angle is None else angle)
+    n = np.array([math.cos(t), math.sin(t)])
+    b = -float(n @ [(width - 1) / 2, (height - 1) / 2])
+    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
+    d = xs * n[0] + ys * n[1] + b
+    mx, my = (xs - 2 * d * n[0]).astype(np.float32), (ys - 2 * d * n[1]).astype(np.float32)
+    mirrored = cv2.remap(base, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    img = np.where((d > 0)[..., None], mirrored, base)
+    return torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1))).float(), torch.tensor([n[0], n[1], b], dtype=torch.float64)

@@ -23,7 +23,7 @@ from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = [
     "SSMScores",
-    "correspondence_rate",
+    "nmrf_correspondence_rate",
     "reconstruct_mirror",
     "reconstruction_quality",
     "ssm_scores",
@@ -46,7 +46,7 @@ def _mask(mask: Any, shape: tuple[int, ...], name: str) -> torch.Tensor:
     return m
 
 
-def correspondence_rate(nmrf: Any, truth: Any, mask: Any, taus: Any = (1, 2, 3, 4, 5, 6, 8, 10, 15, 20)) -> torch.Tensor:
+def nmrf_correspondence_rate(nmrf: Any, truth: Any, mask: Any, taus: Any = (1, 2, 3, 4, 5, 6, 8, 10, 15, 20)) -> torch.Tensor:
     """The fraction of pixels of ``mask`` whose mirror is within ``tau`` pixels of the true one (Sec. 3.3.2).
 
     Args:

@@ -50,8 +50,7 @@ def write_artifacts(result: Any, data: Any, out_dir: str | Path, stem: str) -> l
         fn = _WRITERS.get(cls)
         if fn is not None:
             return list(fn(result, data, out, stem))
-    legacy = getattr(result, "write_artifacts", None)  # TRANSITION: until every result has a viz writer
-    return list(legacy(data, out, stem)) if legacy is not None else []
+    return []
 
 
 def _load_writers() -> None:

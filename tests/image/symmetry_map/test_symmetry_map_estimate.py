@@ -8,7 +8,7 @@ from torchsym.core.registry import SOLVERS
 from torchsym.errors import ConfigError, InputShapeError
 from torchsym.image.symmetry_map import SymmetryMapResult, SymmetryMapSettings, SymmetryMapSolver, symmetry_map
 from torchsym.image.synthetic import mirrored_photo
-from torchsym.metrics.symmetry_map import correspondence_rate
+from torchsym.metrics.symmetry_map import nmrf_correspondence_rate
 
 
 def _back_distance(nmrf: torch.Tensor) -> torch.Tensor:
@@ -32,7 +32,7 @@ class TestSymmetryMap:
         assert d["n_axes"] == 1 and d["map_size"] == [160, 200]
 
     def test_exact_field_recovered(self, irs_result, mirrored):
-        rate = correspondence_rate(irs_result.nmrf[0], mirrored["nmrf"], mirrored["mask"], (5,))
+        rate = nmrf_correspondence_rate(irs_result.nmrf[0], mirrored["nmrf"], mirrored["mask"], (5,))
         assert float(rate[0]) >= 0.8
 
     def test_axis_recovered(self, irs_result, mirrored):
@@ -48,7 +48,7 @@ class TestSymmetryMap:
     def test_other_schemes(self, mirrored, scheme):
         r = symmetry_map(mirrored["image"], n_axes=1, patchmatch={"scheme": scheme})
         assert r.iterations == 0
-        rate = correspondence_rate(r.nmrf[0], mirrored["nmrf"], mirrored["mask"], (5,))
+        rate = nmrf_correspondence_rate(r.nmrf[0], mirrored["nmrf"], mirrored["mask"], (5,))
         assert float(rate[0]) >= 0.8
 
     def test_milp_cover(self, mirrored):
@@ -112,7 +112,7 @@ def test_real_photo_crop(shared_data):
         pytest.skip("no dev photographs")
     d = mirrored_photo(height=240, width=320, photo_dir=str(photos), generator=torch.Generator().manual_seed(2))
     r = symmetry_map(d["image"], n_axes=1)
-    rate = correspondence_rate(r.nmrf[0], d["nmrf"], d["mask"], (5,))
+    rate = nmrf_correspondence_rate(r.nmrf[0], d["nmrf"], d["mask"], (5,))
     assert float(rate[0]) >= 0.6
 
 

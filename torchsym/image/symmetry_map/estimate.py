@@ -114,7 +114,7 @@ def cluster_field(
         state = best_mirror_pixel(desc, left, right, pm.max_bmp_pairs, generator)
     else:
         state = initial_field(desc, left, right, generator)
-        radius = pm.radius if pm.radius is not None else search_radius(left, right, h, w, generator)
+        radius = pm.search_radius if pm.search_radius is not None else search_radius(left, right, h, w, generator)
         left_index = grid_index(desc, left)
         for _ in range(pm.max_iters):
             state = patchmatch_iteration(

@@ -63,7 +63,7 @@ class PatchMatchSettings(Settings):
     stride: int = setting(2, "the field is searched on every stride-th pixel, elsewhere it follows by symmetry coherency (1: every pixel)", unit="px", low=1)
     neighbours: bool = setting(False, "also propagate from the 4 grid neighbours (PatchMatch's own step; not in Algorithm 3)")
     n_samples: int = setting(15, "random-search samples per pixel and iteration (the thesis's e)", low=0)
-    radius: float | None = setting(
+    search_radius: float | None = setting(
         None, "random-search radius r; None: the spread of a pixel's reflections through the cluster's pairs", unit="px", low=1.0
     )
     min_gain: float = setting(0.2, "a random-search sample must lower the cost |d_p - m_q|^2 by more than this (thesis: 0)", low=0.0)
