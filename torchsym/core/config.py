@@ -65,7 +65,7 @@ class _BoundedLoader(yaml.SafeLoader):
 
 
 class _Refused(Exception):
-    pass
+    """A YAML document past a bound of :class:`_BoundedLoader`."""
 
 
 def load_yaml(text: str, where: str) -> Any:

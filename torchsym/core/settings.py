@@ -132,7 +132,7 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
             try:
                 return _coerce(value, a, meta, path)
             except ConfigError:
-                pass
+                continue  # try the union's next type
         kinds = " or ".join(_describe(a) for a in args if a is not type(None))
         null = " or null" if type(None) in args else ""
         raise ConfigError(f"{path}: expected {kinds}{_with_range(meta)}{null}, got {value!r}")
