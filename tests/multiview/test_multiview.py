@@ -197,3 +197,29 @@ def test_votes_equal_the_table():
     n, b = pair_planes(left, right)
     table = inlier_table(left, right, n, b, 0.04, 1.0)
     assert torch.equal(plane_votes(left, right, n, b, 0.04, 1.0), table.sum(1))
+
+
+def test_number_by_name(scene, tmp_path):
+    """Photos extracted out of name order get ids in name order, each keeping its features."""
+    import cv2
+
+    from torchsym.multiview.reconstruct import number_by_name
+
+    names = [f"view_{i}.png" for i in range(3)]
+    for name, image in zip(names, scene.images[:3]):
+        a = (image.clamp(0, 1) * 255).round().to(torch.uint8).expand(3, -1, -1).permute(1, 2, 0).numpy()
+        cv2.imwrite(str(tmp_path / name), a)
+    db = tmp_path / "database.db"
+    options = pycolmap.FeatureExtractionOptions(num_threads=1)
+    pycolmap.extract_features(db, tmp_path, image_names=names[::-1], camera_mode=pycolmap.CameraMode.SINGLE,
+                              extraction_options=options, device=pycolmap.Device.cpu)
+    before = pycolmap.Database.open(str(db))
+    features = {im.name: before.read_descriptors(im.image_id).data.copy() for im in before.read_all_images()}
+    before.close()
+    number_by_name(db)
+    after = pycolmap.Database.open(str(db))
+    images = sorted(after.read_all_images(), key=lambda im: im.image_id)
+    assert [im.name for im in images] == names
+    for im in images:
+        np.testing.assert_array_equal(after.read_descriptors(im.image_id).data, features[im.name])
+    after.close()

@@ -27,7 +27,7 @@ from torchsym.multiview.views import Views
 
 log = logging.getLogger(__name__)
 
-__all__ = ["SparseModel", "point_descriptors", "reconstruct"]
+__all__ = ["SparseModel", "number_by_name", "point_descriptors", "reconstruct"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,6 +71,37 @@ def _stage_photos(views: Views, folder: Path) -> list[str]:
     return names
 
 
+def number_by_name(database_path: Path) -> None:
+    """Give the photos of a COLMAP database ids in the order of their names.
+
+    Threaded extraction numbers the photos in the order their threads finish; matching
+    and mapping visit photos by id, so without this their results would vary from run to
+    run. The features of each photo do not depend on the thread count. The photos must
+    share one camera (``single_camera``): ids are reassigned, cameras are not.
+    """
+    import pycolmap
+
+    db = pycolmap.Database.open(str(database_path))
+    try:
+        images = sorted(db.read_all_images(), key=lambda im: im.image_id)
+        names = sorted(im.name for im in images)
+        if [im.name for im in images] == names:
+            return
+        features = {im.name: (db.read_keypoints(im.image_id), db.read_descriptors(im.image_id)) for im in images}
+        db.clear_keypoints()
+        db.clear_descriptors()
+        for im in images:  # two passes: names are unique in the database
+            im.name = "~" + im.name
+            db.update_image(im)
+        for im, name in zip(images, names):
+            im.name = name
+            db.update_image(im)
+            db.write_keypoints(im.image_id, features[name][0])
+            db.write_descriptors(im.image_id, features[name][1])
+    finally:
+        db.close()
+
+
 def point_descriptors(reconstruction: Any, database_path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Each 3D point's id and the mean of its observations' SIFT descriptors (Sec. 5.3.2).
 
@@ -109,12 +140,15 @@ def reconstruct(views: Views, settings: ReconstructionSettings, seed: int) -> Sp
         names = _stage_photos(views, work / "images")
         db = work / "database.db"
         t0 = time.perf_counter()
-        extraction = pycolmap.FeatureExtractionOptions(max_image_size=settings.max_image_side, num_threads=settings.n_threads)
+        # Renumbering by name (number_by_name) keeps each photo's camera only when they share one.
+        threads = settings.n_extraction_threads if settings.single_camera else 1
+        extraction = pycolmap.FeatureExtractionOptions(max_image_size=settings.max_image_side, num_threads=threads)
         extraction.sift.max_num_features = settings.max_features
         mode = pycolmap.CameraMode.SINGLE if settings.single_camera else pycolmap.CameraMode.AUTO
         pycolmap.extract_features(
             db, work / "images", image_names=names, camera_mode=mode, extraction_options=extraction, device=pycolmap.Device.cpu
         )
+        number_by_name(db)
         timings["features"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         matching = pycolmap.FeatureMatchingOptions(num_threads=settings.n_threads)

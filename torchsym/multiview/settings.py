@@ -16,7 +16,8 @@ class ReconstructionSettings(Settings):
     max_image_side: int = setting(1600, "photos are scaled so that their longer side is at most this", unit="px", low=64)
     max_features: int = setting(8192, "most SIFT features kept per photo", low=16)
     single_camera: bool = setting(True, "all photos share one camera's intrinsics")
-    n_threads: int = setting(1, "threads COLMAP may use (COLMAP is bit-reproducible with 1 only)", low=1)
+    n_extraction_threads: int = setting(2, "threads for SIFT extraction (any count gives the same bits; 1 without single_camera)", low=1)
+    n_threads: int = setting(1, "threads for COLMAP's matching and mapping (bit-reproducible with 1 only)", low=1)
 
 
 @dataclasses.dataclass(frozen=True)
