@@ -59,18 +59,20 @@ def _crashed(attempts: int, exc: BaseException) -> dict[str, Any]:
 
 
 def serial_outcomes(specs: Sequence[TaskSpec], threads: int) -> Iterator[Outcome]:
-    """Run ``specs`` one after another in this process, torch, BLAS and OpenMP limited to
-    ``threads`` threads as on a worker (the results do not depend on the engine)."""
+    """Run ``specs`` one after another in this process, torch, OpenCV, BLAS and OpenMP limited
+    to ``threads`` threads as on a worker (the results do not depend on the engine)."""
+    import cv2
     import torch
     from threadpoolctl import threadpool_limits
 
-    before = torch.get_num_threads()
+    before = torch.get_num_threads(), cv2.getNumThreads()
     try:
         with threadpool_limits(threads):  # BLAS and OpenMP as on a worker
             for spec in specs:
                 yield spec, run_task(spec), 1
     finally:
-        torch.set_num_threads(before)
+        torch.set_num_threads(before[0])
+        cv2.setNumThreads(before[1])
 
 
 def _scheduler_target(address: str | None) -> dict[str, Any]:

@@ -28,7 +28,7 @@ class TaskSpec:
         input: the input file, resolved path.
         config: the pipeline config as :meth:`PipelineConfig.to_dict` gives it, with the
             run's overrides applied.
-        threads: ``torch.set_num_threads`` for the solve.
+        threads: torch and OpenCV threads for the solve.
         figures_dir: folder for the result's pictures, or None for none.
         stem: file-name stem of the pictures.
         imports: modules imported before the config is read (they register solvers).
@@ -56,10 +56,13 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
     ``"error"`` (``error`` is ``{"type", "message", "where"}``). ``seconds`` is the wall
     time of reading, building and solving (pictures excluded).
     """
+    import cv2
     import torch
 
     if torch.get_num_threads() != spec.threads:
         torch.set_num_threads(spec.threads)
+    if cv2.getNumThreads() != spec.threads:
+        cv2.setNumThreads(spec.threads)
     out: dict[str, Any] = {"status": "error", "kind": None, "result": None, "error": None, "seconds": 0.0, "artifacts": []}
     t0 = time.perf_counter()
     try:

@@ -12,7 +12,7 @@ __all__ = ["WorkerSetup"]
 
 
 class WorkerSetup(WorkerPlugin):
-    """Limit torch, BLAS and OpenMP to ``threads`` threads and import torchsym (and ``imports``) once per
+    """Limit torch, BLAS and OpenMP to ``threads`` threads (OpenCV per task) and import torchsym (and ``imports``) once per
     worker, before its first task.
 
     Args:
