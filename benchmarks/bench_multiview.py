@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import time
@@ -255,7 +256,9 @@ def main(argv=None) -> int:
             f"{r['pairs']} | {r['inliers']} | {r['angle_deg']:.3f} | {100 * r['offset_share']:.2f} | {r['seconds']:.1f} | "
             f"{recon:.1f} | {after:.2f} |"
         )
-    lines += ["", "Stages of the all-photo Sceaux run (s): "
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
+    lines += ["", f"Load average at the end of the run: {load} (above 2 on 2 cores, the seconds include other processes' share).",
+              "", "Stages of the all-photo Sceaux run (s): "
               + ", ".join(f"{k} {v:.2f}" for k, v in rows[0]["timings"].items()), "",
               "## The plane step alone (synthetic pairs, 15 % inliers)", "",
               "| pairs | median seconds | angle error (deg) |", "|---|---|---|"]
