@@ -18,8 +18,7 @@ import numpy as np
 import torch
 
 from torchsym.core.checks import check_image
-from torchsym.features.mirror_pairs import mirror_distance_matrix
-from torchsym.features.sift import detect_sift
+from torchsym.features.mirror_pairs import mirror_sift_knn
 from torchsym.image.results import ReflectionAxesResult, build_result, empty_result
 
 __all__ = ["loy_eklundh_axes"]
@@ -54,14 +53,10 @@ def loy_eklundh_axes(
 
     img = check_image(image, "image", min_size=16)
     h, w = int(img.shape[-2]), int(img.shape[-1])
-    feats = detect_sift(img, num_features=num_features)
+    feats, ii, jj, _ = mirror_sift_knn(img, num_features=num_features, k=matches_per_point, min_pair_distance=min_pair_distance)
     if len(feats) < 2:
         return empty_result(h, w, "loy_eklundh")
-    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)
-    k = min(matches_per_point, len(feats) - 1)
-    vals, nn = dist.topk(k, dim=1, largest=False)
-    ii = torch.arange(len(feats))[:, None].expand(-1, k)[torch.isfinite(vals)].numpy()
-    jj = nn[torch.isfinite(vals)].numpy()
+    ii, jj = ii.numpy(), jj.numpy()
     keep = ii != jj
     ii, jj = ii[keep], jj[keep]
     if ii.size == 0:

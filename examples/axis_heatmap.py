@@ -15,12 +15,13 @@ heat maps (:func:`torchsym.image.axis_heatmap`, ``mode="equisym"``).
 
 Writes a PNG of held-out images, targets, network predictions and fitted axes.
 
-    python examples/axis_heatmap.py [--steps 300] [--out axis_heatmap.png]
+    python examples/axis_heatmap.py [--steps 300] [--out examples/output]
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import torch
 from torch import nn
@@ -113,8 +114,10 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--fit-steps", type=int, default=150)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default="axis_heatmap.png")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output", help="folder for axis_heatmap.png")
     args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    png = args.out / "axis_heatmap.png"
     torch.set_num_threads(1)
     torch.manual_seed(args.seed)  # the network's initial weights (nn layers draw from the global generator)
     x_tr, y_tr, _, _ = make_set(args.train, 1000)
@@ -142,8 +145,8 @@ def main() -> None:
         f"{endpoint_error(start, axes_te).mean():.2f} px -> {endpoint_error(fitted, axes_te).mean():.3f} px, "
         f"pixel F1 of the fitted maps {fit_score.max_f1:.3f}"
     )
-    plot(x_te, y_te, pred, fitted, args.out)
-    print(f"wrote {args.out}")
+    plot(x_te, y_te, pred, fitted, png)
+    print(f"wrote {png}")
 
 
 if __name__ == "__main__":

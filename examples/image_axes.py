@@ -8,6 +8,7 @@ mirrored about it. The picture numbers the three best axes by rank with their sc
 draws the mirror pairs of the best one.
 """
 
+import argparse
 from pathlib import Path
 
 import torch
@@ -17,8 +18,11 @@ from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.io import read_image
 from torchsym.viz import write_artifacts
 
-out = Path("examples_out")
-out.mkdir(exist_ok=True)
+ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output")
+args = ap.parse_args()
+out = args.out
+out.mkdir(parents=True, exist_ok=True)
 photo = Path(__file__).resolve().parents[1].parent / "shared/data/images/reflection_single_dev/refs_047.jpg"
 if photo.exists():
     image = read_image(photo)

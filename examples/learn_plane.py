@@ -7,13 +7,14 @@ normals through the centre and are trained together for a few hundred Adam steps
 no mirror under a wrong plane, stop pulling); the plane with the lowest loss is the
 answer. Prints the angle and offset errors against the true plane and writes a PNG.
 
-    python examples/learn_plane.py [--steps 300] [--starts 8] [--out learn_plane.png]
+    python examples/learn_plane.py [--steps 300] [--starts 8] [--out examples/output]
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 import torch
 
@@ -86,8 +87,10 @@ def main() -> None:
     ap.add_argument("--points", type=int, default=1000)
     ap.add_argument("--lr", type=float, default=0.02)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default="learn_plane.png")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output", help="folder for learn_plane.png")
     args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    png = args.out / "learn_plane.png"
     torch.set_num_threads(1)
     gen = torch.Generator().manual_seed(args.seed)
     points, n_true, b_true = prepare(args.points, gen)
@@ -100,8 +103,8 @@ def main() -> None:
     print(f"steps {args.steps}, starts {args.starts}: best start {best}, loss {float(final[best]):.2e}")
     print(f"angle error {angle:.3f} deg, offset error {offset_err:.4f} (unit radius)")
     print("angle error of every start (deg): " + ", ".join(f"{a:.1f}" for a in angles))
-    plot(points, normal[best], n_true, history, best, args.out)
-    print(f"wrote {args.out}")
+    plot(points, normal[best], n_true, history, best, png)
+    print(f"wrote {png}")
 
 
 if __name__ == "__main__":

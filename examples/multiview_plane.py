@@ -7,7 +7,7 @@ most pairs agree on is the scene's reflection plane. Pass a folder of your own p
 the first argument to run on them instead.
 """
 
-import sys
+import argparse
 from pathlib import Path
 
 import torch
@@ -16,10 +16,14 @@ import torchsym
 from torchsym.multiview.synthetic import symmetric_scene
 from torchsym.viz import write_artifacts
 
-out = Path("examples_out")
-out.mkdir(exist_ok=True)
-if len(sys.argv) > 1:
-    photos = sys.argv[1]  # a folder of photos
+ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output")
+ap.add_argument("photos", nargs="?", help="a folder of photos of one scene (default: a synthetic scene)")
+args = ap.parse_args()
+out = args.out
+out.mkdir(parents=True, exist_ok=True)
+if args.photos:
+    photos = args.photos
 else:
     photos = symmetric_scene(6, height=360, width=480, generator=torch.Generator().manual_seed(2)).images
 result = torchsym.multiview.detect_multiview_plane(photos)

@@ -7,6 +7,7 @@ image on the other (same colour in the picture). The union of the mirror pairs i
 symmetric objects' mask, found without a box or a click.
 """
 
+import argparse
 from pathlib import Path
 
 import torch
@@ -15,8 +16,11 @@ from torchsym.image import symm_slic
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.viz import write_artifacts
 
-out = Path("examples_out")
-out.mkdir(exist_ok=True)
+ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output")
+args = ap.parse_args()
+out = args.out
+out.mkdir(parents=True, exist_ok=True)
 image, axes = mirrored_objects_image(2, height=480, width=640, generator=torch.Generator().manual_seed(3))
 result = symm_slic(image, n_superpixels=400)
 print(f"{result.n_superpixels} superpixels, {len(result.pairs)} mirror pairs on {len(result.normals)} axes")

@@ -2,18 +2,40 @@
 
 Images, point clouds, triangle meshes and d-dimensional point sets, following the thesis
 "Reflection Symmetry Detection" (R. Nagar). Start with :func:`torchsym.detect`.
+
+The top level holds the solvers (functions and modules), their results and settings,
+``detect``, the config and registry API, the error types, the dataset runner and the
+subpackages; building blocks stay in their subpackages (``torchsym.geometry``...).
 """
 
 from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from torchsym import data, geometry, image, io, mesh, metrics, multiview, pointcloud, pointset
+from torchsym import (
+    core,
+    data,
+    features,
+    geometry,
+    image,
+    io,
+    losses,
+    manifolds,
+    matching,
+    mesh,
+    metrics,
+    multiview,
+    optim,
+    pointcloud,
+    pointset,
+    runner,
+    viz,
+)
 from torchsym.api import detect
 from torchsym.core.config import Pipeline, PipelineConfig, build_pipeline, load_config
 from torchsym.core.registry import SOLVERS, register_solver
 from torchsym.core.results import Result
-from torchsym.runner import evaluate, read_results, run
+from torchsym.core.settings import Settings, Solver
 from torchsym.errors import (
     ConfigError,
     InputFileError,
@@ -22,44 +44,72 @@ from torchsym.errors import (
     SolverError,
     TorchsymError,
 )
-from torchsym.image import *  # noqa: F401,F403  (every solver importable from the top level)
-from torchsym.mesh import *  # noqa: F401,F403
-from torchsym.pointcloud import *  # noqa: F401,F403
-from torchsym.pointset import *  # noqa: F401,F403
-from torchsym.multiview import MultiviewPlaneDetector, MultiviewPlaneResult, MultiviewPlaneSettings  # noqa: F401
+from torchsym.geometry.mesh import Mesh
+from torchsym.image import (
+    BoundaryCliqueDetector,
+    BoundaryCliquesSettings,
+    ImageAxisResult,
+    KSymmetryDetector,
+    KSymmetrySettings,
+    PointSymmImage,
+    PointSymmImageSettings,
+    ReflectionAxesBatch,
+    ReflectionAxesResult,
+    StylizeSolver,
+    SymmetryMapResult,
+    SymmetryMapSolver,
+    SymmSlic,
+    SymmSlicResult,
+    boundary_clique_axes,
+    ksymmetry_axes,
+    point_symm_image,
+    stylize,
+    symm_slic,
+    symmetry_map,
+)
+from torchsym.image.symmetry_map import StylizedResult, StylizeSettings, SymmetryMapSettings
+from torchsym.image.symmslic import SymmSlicSettings
+from torchsym.mesh import IntrinsicSymmetry, IntrinsicSymmetryResult, IntrinsicSymmetrySettings, intrinsic_symmetry
+from torchsym.multiview import (
+    MultiviewPlaneDetector,
+    MultiviewPlaneResult,
+    MultiviewPlaneSettings,
+    detect_multiview_plane,
+)
+from torchsym.pointcloud import (
+    ReflectionPlaneDetector,
+    ReflectionPlaneResult,
+    ReflectionPlaneSettings,
+    add_outliers,
+    detect_reflection_plane,
+    planted_symmetric_cloud,
+)
+from torchsym.pointset import PointSymm, PointSymmResult, PointSymmSettings, make_symmetric_pointset, point_symm
+from torchsym.runner import evaluate, read_results, run
 
 __all__ = [
-    "MultiviewPlaneDetector",
-    "MultiviewPlaneResult",
-    "MultiviewPlaneSettings",
-    "SOLVERS",
-    "ConfigError",
-    "InputFileError",
-    "InputShapeError",
-    "InputValueError",
-    "Pipeline",
-    "PipelineConfig",
-    "Result",
-    "SolverError",
-    "TorchsymError",
-    "build_pipeline",
-    "data",
-    "detect",
-    "evaluate",
-    "geometry",
-    "image",
-    "io",
-    "load_config",
-    "mesh",
-    "metrics",
-    "pointcloud",
-    "pointset",
-    "read_results",
-    "register_solver",
-    "run",
-]
-from torchsym import image as _image, mesh as _mesh, pointcloud as _pointcloud, pointset as _pointset  # noqa: E402
-
-for _m in (_image, _mesh, _pointcloud, _pointset):
-    __all__ += [n for n in _m.__all__ if n not in __all__]
-del _m
+    # solvers: module, function, result, settings
+    "ReflectionPlaneDetector", "detect_reflection_plane", "ReflectionPlaneResult", "ReflectionPlaneSettings",
+    "PointSymm", "point_symm", "PointSymmResult", "PointSymmSettings",
+    "IntrinsicSymmetry", "intrinsic_symmetry", "IntrinsicSymmetryResult", "IntrinsicSymmetrySettings",
+    "BoundaryCliqueDetector", "boundary_clique_axes", "ReflectionAxesResult", "ReflectionAxesBatch",
+    "BoundaryCliquesSettings",
+    "KSymmetryDetector", "ksymmetry_axes", "KSymmetrySettings",
+    "PointSymmImage", "point_symm_image", "ImageAxisResult", "PointSymmImageSettings",
+    "SymmSlic", "symm_slic", "SymmSlicResult", "SymmSlicSettings",
+    "SymmetryMapSolver", "symmetry_map", "SymmetryMapResult", "SymmetryMapSettings",
+    "StylizeSolver", "stylize", "StylizedResult", "StylizeSettings",
+    "MultiviewPlaneDetector", "detect_multiview_plane", "MultiviewPlaneResult", "MultiviewPlaneSettings",
+    # inputs with a known symmetry, and the mesh type
+    "Mesh", "add_outliers", "make_symmetric_pointset", "planted_symmetric_cloud",
+    # one call, configs, registry, shapes
+    "detect", "Pipeline", "PipelineConfig", "build_pipeline", "load_config",
+    "SOLVERS", "register_solver", "Result", "Settings", "Solver",
+    # errors
+    "TorchsymError", "ConfigError", "InputFileError", "InputShapeError", "InputValueError", "SolverError",
+    # dataset runner
+    "run", "evaluate", "read_results",
+    # subpackages
+    "core", "data", "features", "geometry", "image", "io", "losses", "manifolds", "matching", "mesh",
+    "metrics", "multiview", "optim", "pointcloud", "pointset", "runner", "viz",
+]  # fmt: skip

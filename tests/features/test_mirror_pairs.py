@@ -11,8 +11,37 @@ from torchsym.features import (
     elbow_index,
     mirror_descriptors,
     mirror_distance_matrix,
+    mirror_sift_knn,
     mutual_knn_pairs,
+    nearest_mirrors,
 )
+
+
+class TestNearestMirrors:
+    def test_value(self):
+        inf = float("inf")
+        d = torch.tensor([[inf, 0.3, 0.1], [0.3, inf, inf], [0.1, inf, inf]])
+        i, j, dist = nearest_mirrors(d, 2)
+        assert i.tolist() == [0, 0, 1, 2] and j.tolist() == [2, 1, 0, 0]
+        assert torch.equal(dist, torch.tensor([0.1, 0.3, 0.3, 0.1]))
+
+    def test_k_capped(self):
+        i, _, _ = nearest_mirrors(torch.tensor([[float("inf"), 1.0], [1.0, float("inf")]]), 5)
+        assert i.tolist() == [0, 1]
+
+
+class TestMirrorSiftKnn:
+    def test_smoke(self):
+        from torchsym.image.synthetic import mirrored_objects_image
+
+        image, _ = mirrored_objects_image(1, height=160, width=200, generator=torch.Generator().manual_seed(0))
+        feats, i, j, dist = mirror_sift_knn(image, num_features=200, k=2)
+        assert len(feats) >= 2 and i.shape == j.shape == dist.shape and i.numel() <= 2 * len(feats)
+        assert bool((i != j).all()) and bool(torch.isfinite(dist).all())
+
+    def test_no_keypoints(self):
+        feats, i, j, dist = mirror_sift_knn(torch.full((3, 64, 64), 0.5))
+        assert i.numel() == j.numel() == dist.numel() == 0
 
 
 class TestMutualKnnPairs:

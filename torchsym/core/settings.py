@@ -33,7 +33,7 @@ import difflib
 import math
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar, Literal, TypeVar, Union, get_args, get_origin
 
 from torch import nn
@@ -213,14 +213,13 @@ class Settings:
         return [f.name for f in dataclasses.fields(cls)]
 
     @classmethod
-    def from_dict(cls: type[S], mapping: Mapping[str, Any] | None, *, where: str = "") -> S:
-        """Settings from a (nested) mapping, as read from YAML; missing keys keep their
-        defaults. Unknown keys are a :class:`ConfigError` listing the valid names.
-
-        ``where`` prefixes the field paths in messages (e.g. ``"refine"``).
-        """
-        mapping = dict(mapping or {})
-        prefix = f"{where}." if where else ""
+    def _checked(
+        cls, mapping: Mapping[str, Any], prefix: str, group: Callable[[str, type, Mapping[str, Any], str], Any]
+    ) -> dict[str, Any]:
+        """``mapping`` with every key checked against the fields (an unknown one is a
+        :class:`ConfigError` listing the valid names) and a group given as a mapping turned
+        into its settings by ``group(key, group_class, mapping, path)``. A group given as
+        anything but a mapping or its settings class is a :class:`ConfigError`."""
         names = cls.field_names()
         hints = cls._hints()
         values = {}
@@ -233,10 +232,21 @@ class Settings:
             hint = hints[key]
             if isinstance(hint, type) and issubclass(hint, Settings):
                 if isinstance(value, Mapping):
-                    value = hint.from_dict(value, where=f"{prefix}{key}")
+                    value = group(key, hint, value, f"{prefix}{key}")
                 elif not isinstance(value, hint):
                     raise ConfigError(f"{prefix}{key}: expected a mapping of {hint.__name__} settings, got {value!r}")
             values[key] = value
+        return values
+
+    @classmethod
+    def from_dict(cls: type[S], mapping: Mapping[str, Any] | None, *, where: str = "") -> S:
+        """Settings from a (nested) mapping, as read from YAML; missing keys keep their
+        defaults. Unknown keys are a :class:`ConfigError` listing the valid names.
+
+        ``where`` prefixes the field paths in messages (e.g. ``"refine"``).
+        """
+        prefix = f"{where}." if where else ""
+        values = cls._checked(dict(mapping or {}), prefix, lambda key, hint, value, path: hint.from_dict(value, where=path))
         return _build(cls, values, prefix)
 
     def replace(self: S, overrides: Mapping[str, Any] | None = None, *, where: str = "", **kw: Any) -> S:
@@ -254,19 +264,7 @@ class Settings:
             else:
                 merged[head] = value
         prefix = f"{where}." if where else ""
-        names = self.field_names()
-        hints = self._hints()
-        values = {}
-        for key, value in merged.items():
-            if key not in names:
-                raise ConfigError(
-                    f"{prefix}{key}: unknown setting of {type(self).__name__}{_suggest(key, names)}; "
-                    f"valid: {', '.join(names)}"
-                )
-            hint = hints[key]
-            if isinstance(hint, type) and issubclass(hint, Settings) and isinstance(value, Mapping):
-                value = getattr(self, key).replace(value, where=f"{prefix}{key}")
-            values[key] = value
+        values = self._checked(merged, prefix, lambda key, hint, value, path: getattr(self, key).replace(value, where=path))
         current = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         return _build(type(self), {**current, **values}, prefix)
 

@@ -5,7 +5,9 @@ from torchsym.features.mirror_pairs import (
     choose_k1,
     elbow_index,
     mirror_distance_matrix,
+    mirror_sift_knn,
     mutual_knn_pairs,
+    nearest_mirrors,
 )
 from torchsym.features.sift import (
     SiftFeatures,
@@ -23,5 +25,7 @@ __all__ = [
     "mirror_descriptors",
     "mirror_distance_matrix",
     "mirror_permutation",
+    "mirror_sift_knn",
     "mutual_knn_pairs",
+    "nearest_mirrors",
 ]

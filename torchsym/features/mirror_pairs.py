@@ -18,9 +18,16 @@ import torch
 
 from torchsym.core.checks import check_int
 from torchsym.errors import InputShapeError
-from torchsym.features.sift import mirror_descriptors
+from torchsym.features.sift import SiftFeatures, detect_sift, mirror_descriptors
 
-__all__ = ["choose_k1", "elbow_index", "mirror_distance_matrix", "mutual_knn_pairs"]
+__all__ = [
+    "choose_k1",
+    "elbow_index",
+    "mirror_distance_matrix",
+    "mirror_sift_knn",
+    "mutual_knn_pairs",
+    "nearest_mirrors",
+]
 
 
 def elbow_index(values: torch.Tensor) -> int:
@@ -59,6 +66,47 @@ def mirror_distance_matrix(descriptors: torch.Tensor, points: torch.Tensor, *, m
     return dist.masked_fill(near, float("inf"))
 
 
+def nearest_mirrors(dist: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Each keypoint's ``k`` nearest mirror matches under ``dist (N, N)`` (``inf`` entries
+    left out), row by row, nearest first.
+
+    Returns:
+        ``i (M,)`` and ``j (M,)`` int64 keypoint indices and ``distance (M,)``.
+    """
+    k = min(k, dist.shape[0] - 1)
+    vals, idx = dist.topk(k, dim=1, largest=False)  # (N, k)
+    rows = torch.arange(dist.shape[0], device=dist.device)[:, None].expand(-1, k)
+    ok = torch.isfinite(vals)
+    return rows[ok], idx[ok], vals[ok]
+
+
+def mirror_sift_knn(
+    image: torch.Tensor, *, num_features: int = 1000, k: int = 3, min_pair_distance: float = 5.0
+) -> tuple[SiftFeatures, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """SIFT keypoints of ``image`` and each one's ``k`` nearest mirrored-SIFT matches.
+
+    Keypoints and descriptors by :func:`~torchsym.features.sift.detect_sift`, distances
+    ``|m_j - d_i|`` by :func:`mirror_distance_matrix` (keypoints closer than
+    ``min_pair_distance`` pixels are not matched), matches by :func:`nearest_mirrors`.
+
+    Args:
+        image: ``(C, H, W)`` or ``(1, C, H, W)`` float image in [0, 1].
+        num_features: the most SIFT keypoints.
+        k: matches per keypoint.
+        min_pair_distance: pixels.
+
+    Returns:
+        The features, and ``i (M,)``, ``j (M,)``, ``distance (M,)`` as
+        :func:`nearest_mirrors` gives them (empty with fewer than two keypoints).
+    """
+    feats = detect_sift(image, num_features=num_features)
+    if len(feats) < 2:
+        none = torch.zeros(0, dtype=torch.int64, device=feats.points.device)
+        return feats, none, none, torch.zeros(0, device=feats.points.device)
+    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)  # (N, N)
+    return (feats, *nearest_mirrors(dist, k))
+
+
 def mutual_knn_pairs(dist: torch.Tensor, k1: int) -> torch.Tensor:
     """Pairs ``(i, j)``, ``i < j``, that are mutual ``k1`` nearest neighbours under ``dist (N, N)`` (Eq. 2.1).
 
@@ -69,11 +117,9 @@ def mutual_knn_pairs(dist: torch.Tensor, k1: int) -> torch.Tensor:
     n = dist.shape[0]
     if n < 2:
         return torch.zeros(0, 2, dtype=torch.int64, device=dist.device)
-    k = min(k1, n - 1)
-    vals, idx = dist.topk(k, dim=1, largest=False)  # (N, k)
+    i, j, _ = nearest_mirrors(dist, k1)
     knn = torch.zeros(n, n, dtype=torch.bool, device=dist.device)
-    rows = torch.arange(n, device=dist.device)[:, None].expand(-1, k)
-    knn[rows[torch.isfinite(vals)], idx[torch.isfinite(vals)]] = True
+    knn[i, j] = True
     mutual = knn & knn.T
     return torch.triu(mutual, diagonal=1).nonzero()
 

@@ -1,66 +1,21 @@
-"""Reflection geometry in d dimensions, batched and differentiable, and the triangle mesh type."""
+"""Reflection geometry in d dimensions, batched and differentiable, and the triangle mesh type.
 
-from torchsym.geometry.mesh import Mesh
+Modules: ``reflection`` (planes, reflections, their parametrisations), ``mesh`` (the
+``Mesh`` type), ``sampling`` (normals spread over the sphere), ``cone`` (directions in a
+cone), ``conventions`` (PRS-Net and NeRD plane conventions), ``plane_votes`` (per-pair
+planes and their clustering), ``volume`` (reflection of voxel grids). Each module's public
+names are importable from here.
+"""
 
-from torchsym.geometry.reflection import (
-    angles_to_normal,
-    canonical_sign,
-    normal_to_angles,
-    plane_angle,
-    plane_distance,
-    plane_from_pairs,
-    plane_from_reflection,
-    point_plane_distance,
-    reflect_points,
-    reflection_matrix,
-    reflection_matrix_from_angles,
-    reflection_transform,
-    spread_normals,
-    tangent_basis,
-)
-from torchsym.geometry.sampling import sphere_normals
+from torchsym.geometry import cone, conventions, mesh, plane_votes, reflection, sampling, volume
+from torchsym.geometry.cone import *  # noqa: F403
+from torchsym.geometry.conventions import *  # noqa: F403
+from torchsym.geometry.mesh import *  # noqa: F403
+from torchsym.geometry.plane_votes import *  # noqa: F403
+from torchsym.geometry.reflection import *  # noqa: F403
+from torchsym.geometry.sampling import *  # noqa: F403
+from torchsym.geometry.volume import *  # noqa: F403
 
 __all__ = [
-    "Mesh",
-    "angles_to_normal",
-    "canonical_sign",
-    "normal_to_angles",
-    "plane_angle",
-    "plane_distance",
-    "plane_from_pairs",
-    "plane_from_reflection",
-    "point_plane_distance",
-    "reflect_points",
-    "reflection_matrix",
-    "reflection_matrix_from_angles",
-    "reflection_transform",
-    "sphere_normals",
-    "spread_normals",
-    "tangent_basis",
-]
-
-from torchsym.geometry.cone import sample_cone  # noqa: E402
-from torchsym.geometry.conventions import (  # noqa: E402
-    check_planes,
-    planes_from_nerd,
-    planes_from_prsnet,
-    planes_to_nerd,
-    planes_to_prsnet,
-)
-from torchsym.geometry.plane_votes import PlaneClusters, cluster_planes, pair_planes, plane_vote_distance  # noqa: E402
-from torchsym.geometry.volume import grid_cell_centres, reflect_volume  # noqa: E402
-
-__all__ += [
-    "PlaneClusters",
-    "check_planes",
-    "cluster_planes",
-    "grid_cell_centres",
-    "pair_planes",
-    "planes_from_nerd",
-    "planes_from_prsnet",
-    "planes_to_nerd",
-    "planes_to_prsnet",
-    "plane_vote_distance",
-    "reflect_volume",
-    "sample_cone",
+    name for module in (mesh, reflection, sampling, cone, conventions, plane_votes, volume) for name in module.__all__
 ]

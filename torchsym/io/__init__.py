@@ -1,32 +1,12 @@
-"""Reading inputs and writing results."""
+"""Reading inputs and writing results.
 
-from torchsym.io.read import (
-    IMAGE_SUFFIXES,
-    MAX_PIXELS,
-    MAX_POINTS,
-    MESH_SUFFIXES,
-    POINT_SUFFIXES,
-    infer_kind,
-    load_input,
-    read_image,
-    read_mesh,
-    read_pointcloud,
-)
-from torchsym.io.write import write_image, write_json, write_mesh, write_ply
+``read``: point clouds, meshes and images from files, and the kind of an input;
+``meshfiles``: mesh file parsing; ``write``: JSON, PLY, meshes and images. The public
+names of ``read`` and ``write`` are importable from here.
+"""
 
-__all__ = [
-    "IMAGE_SUFFIXES",
-    "MAX_PIXELS",
-    "MAX_POINTS",
-    "MESH_SUFFIXES",
-    "POINT_SUFFIXES",
-    "infer_kind",
-    "load_input",
-    "read_image",
-    "read_mesh",
-    "read_pointcloud",
-    "write_image",
-    "write_json",
-    "write_mesh",
-    "write_ply",
-]
+from torchsym.io import read, write
+from torchsym.io.read import *  # noqa: F403
+from torchsym.io.write import *  # noqa: F403
+
+__all__ = [*read.__all__, *write.__all__]

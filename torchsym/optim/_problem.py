@@ -8,6 +8,7 @@ a second backward pass through the gradient ("double backward").
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -16,6 +17,7 @@ import torch
 
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.manifolds.base import Manifold
+from torchsym.optim.result import OptimResult
 
 
 def lincomb(a: float, u: Any, b: float = 0.0, v: Any = None) -> Any:
@@ -76,6 +78,19 @@ def stop_reason(grad_norm: float, min_grad_norm: float, iterations: int, max_ite
     return None
 
 
+def finish(x: Any, fx: float, grad_norm: float, iterations: int, stop: str, t_start: float) -> OptimResult:
+    """The :class:`OptimResult` of a run that stopped at ``x`` for reason ``stop``."""
+    return OptimResult(
+        x=detach(x),
+        cost=fx,
+        grad_norm=grad_norm,
+        iterations=iterations,
+        stop_reason=stop,
+        converged=stop in ("grad_norm", "step_size"),
+        time=time.perf_counter() - t_start,
+    )
+
+
 class Problem:
     """Evaluates a cost and its Riemannian derivatives at one point at a time.
 
@@ -131,6 +146,11 @@ class Problem:
                     g = self._egrad(leaf)
             self._leaf, self._g = leaf, g
         return f, self.manifold.egrad2rgrad(x, detach(g))
+
+    def at_with_norm(self, x: Any) -> tuple[float, Any, float]:
+        """:meth:`at`, and the norm of the Riemannian gradient."""
+        f, grad = self.at(x)
+        return f, grad, math.sqrt(max(self.inner(grad, grad), 0.0))
 
     def hess(self, u: Any) -> Any:
         """The Riemannian Hessian at the current point applied to the tangent vector ``u``."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from typing import Any
@@ -12,7 +11,7 @@ import torch
 from torchsym.core.checks import check_int, check_positive
 from torchsym.errors import InputValueError
 from torchsym.manifolds.base import Manifold
-from torchsym.optim._problem import Problem, check_start, detach, lincomb
+from torchsym.optim._problem import Problem, check_start, finish, lincomb
 from torchsym.optim._problem import stop_reason as outer_stop
 from torchsym.optim.result import OptimResult
 
@@ -64,8 +63,7 @@ def gradient_descent(
         raise InputValueError(f"max_time: expected a positive number of seconds, got {max_time!r}")
     # The Hessian is never needed, so give the problem a dummy one to skip double backward graphs.
     problem = Problem(manifold, cost, egrad, ehess=lambda x, u: u)
-    fx, grad = problem.at(x)
-    grad_norm = math.sqrt(max(problem.inner(grad, grad), 0.0))
+    fx, grad, grad_norm = problem.at_with_norm(x)
     alpha = 1.0 / max(grad_norm, 1e-300) if grad_norm > 0 else 1.0
     iterations, stop_reason = 0, "max_iter"
     while True:
@@ -91,19 +89,9 @@ def gradient_descent(
             stop_reason = "step_size"
             if a > 0.0:
                 x, fx = x_new, f_new
-                fx, grad = problem.at(x)
-                grad_norm = math.sqrt(max(problem.inner(grad, grad), 0.0))
+                fx, grad, grad_norm = problem.at_with_norm(x)
             break
         alpha = a
         x = x_new
-        fx, grad = problem.at(x)
-        grad_norm = math.sqrt(max(problem.inner(grad, grad), 0.0))
-    return OptimResult(
-        x=detach(x),
-        cost=fx,
-        grad_norm=grad_norm,
-        iterations=iterations,
-        stop_reason=stop_reason,
-        converged=stop_reason in ("grad_norm", "step_size"),
-        time=time.perf_counter() - t_start,
-    )
+        fx, grad, grad_norm = problem.at_with_norm(x)
+    return finish(x, fx, grad_norm, iterations, stop_reason, t_start)

@@ -18,7 +18,7 @@ import torch
 from torchsym.core.checks import check_int, check_positive
 from torchsym.errors import InputValueError
 from torchsym.manifolds.base import Manifold
-from torchsym.optim._problem import Problem, check_start, detach, lincomb
+from torchsym.optim._problem import Problem, check_start, finish, lincomb
 from torchsym.optim._problem import stop_reason as outer_stop
 from torchsym.optim.result import OptimResult
 
@@ -170,8 +170,7 @@ def trust_region(
     max_inner = check_int(max_inner, "max_inner", minimum=1) if max_inner is not None else max(1, total_dim)
 
     problem = Problem(manifold, cost, egrad, ehess)
-    fx, grad = problem.at(x)
-    grad_norm = math.sqrt(max(problem.inner(grad, grad), 0.0))
+    fx, grad, grad_norm = problem.at_with_norm(x)
     iterations = 0
     stop_reason = "max_iter"
     eps = torch.finfo(x[0].dtype if isinstance(x, tuple) else x.dtype).eps
@@ -198,17 +197,8 @@ def trust_region(
         logger.debug("TR %d: f=%.6g |g|=%.3g rho=%.3g Delta=%.3g inner=%d accepted=%s", iterations, fx, grad_norm, rho, Delta, n_inner, accepted)
         if accepted:
             x = x_prop
-            fx, grad = problem.at(x)
-            grad_norm = math.sqrt(max(problem.inner(grad, grad), 0.0))
+            fx, grad, grad_norm = problem.at_with_norm(x)
         if step < min_step_size:
             stop_reason = "step_size"
             break
-    return OptimResult(
-        x=detach(x),
-        cost=fx,
-        grad_norm=grad_norm,
-        iterations=iterations,
-        stop_reason=stop_reason,
-        converged=stop_reason in ("grad_norm", "step_size"),
-        time=time.perf_counter() - t_start,
-    )
+    return finish(x, fx, grad_norm, iterations, stop_reason, t_start)

@@ -36,16 +36,32 @@ def symmetry_colors(vertices: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
     return rgb
 
 
-def _views(v: np.ndarray) -> tuple[np.ndarray, list[tuple[str, np.ndarray]]]:
-    """The principal axes ``(3, 3)`` of ``v (V, 3)`` and two opposite viewing directions along the
-    least one (near the mirror's normal on a near-symmetric shape: the two sides)."""
+def _views(v: np.ndarray, vertex_map: np.ndarray) -> tuple[np.ndarray, list[tuple[str, np.ndarray]]]:
+    """The picture's up direction ``(3,)`` and two opposite viewing directions, each seeing
+    both halves of the symmetry side by side.
+
+    The mirror direction is the principal axis of the displacements ``v - v[map]`` (the
+    normal of the mirror plane of an extrinsic symmetry); up is the widest spread of ``v``
+    across it, and the views look along the third direction, from the front and the back.
+    Without a mapped vertex, the views look along the least principal axis of ``v``.
+    """
     centred = v - v.mean(axis=0)
     _, _, vt = np.linalg.svd(centred, full_matrices=False)  # rows: axes by decreasing spread
-    return vt, [("one side", vt[2]), ("the other side", -vt[2])]
+    ok = vertex_map >= 0
+    moved = v[ok] - v[vertex_map[ok]]  # (M, 3)
+    if not ok.any() or np.linalg.norm(moved) == 0:
+        return vt[0], [("one side", vt[2]), ("the other side", -vt[2])]
+    mirror = np.linalg.svd(moved, full_matrices=False)[2][0]  # (3,)
+    across = centred - np.outer(centred @ mirror, mirror)
+    up = np.linalg.svd(across, full_matrices=False)[2][0]
+    up = up - (up @ mirror) * mirror
+    up /= np.linalg.norm(up)
+    front = np.cross(mirror, up)
+    return up, [("front", front), ("back", -front)]
 
 
 def plot_mesh_symmetry(mesh: Mesh, vertex_map: np.ndarray, path: str | Path, *, title: str = "") -> Path:
-    """PNG with two views of ``mesh`` (from either end of its least principal axis),
+    """PNG with two views of ``mesh`` (front and back across its symmetry, see :func:`_views`),
     faces coloured by :func:`symmetry_colors` of ``vertex_map (V,)`` and shaded by their
     angle to the view, drawn far to near (matplotlib, Agg)."""
     import matplotlib
@@ -59,8 +75,7 @@ def plot_mesh_symmetry(mesh: Mesh, vertex_map: np.ndarray, path: str | Path, *, 
     colors = symmetry_colors(v, vertex_map)[f].mean(axis=1)  # (F, 3)
     normals = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), np.finfo(float).tiny)  # (F, 3)
-    axes, views = _views(v)
-    up = axes[0]
+    up, views = _views(v, vertex_map)
     fig, panes = plt.subplots(1, 2, figsize=(10, 6), dpi=110)
     for pane, (label, d) in zip(panes, views):
         side = np.cross(up, d)  # keeps the picture unmirrored from either side

@@ -24,8 +24,8 @@ def _bgr(image: Any) -> np.ndarray:
 
 
 def draw_superpixels(result: SymmSlicResult, image: Any) -> np.ndarray:
-    """BGR picture: the photo, each mirror superpixel pair tinted in one colour, the
-    superpixel borders in white, the axes in red."""
+    """BGR picture: each mirror superpixel pair tinted in one colour with white borders,
+    the unpaired superpixels faded to grey with grey borders, the axes in red."""
     out = _bgr(image)
     lbl = result.labels.numpy()
     rng = np.random.default_rng(0)
@@ -34,9 +34,13 @@ def draw_superpixels(result: SymmSlicResult, image: Any) -> np.ndarray:
     for p, q in result.pairs.tolist():
         colour = rng.integers(40, 255, 3)
         tint[p], tint[q], has[p], has[q] = colour, colour, True, True
-    m = has[lbl]
-    out[m] = (0.45 * out[m] + 0.55 * tint[lbl[m]]).astype(np.uint8)
-    out[boundary_map(lbl)] = (255, 255, 255)
+    m = has[lbl]  # (H, W) pixels of paired superpixels
+    grey = out[~m].mean(axis=1, keepdims=True)
+    out[~m] = (0.35 * out[~m] + 0.4 * grey + 0.25 * 200).astype(np.uint8)
+    out[m] = (0.3 * out[m] + 0.7 * tint[lbl[m]]).astype(np.uint8)
+    edge = boundary_map(lbl)
+    out[edge & ~m] = (150, 150, 150)
+    out[edge & m] = (255, 255, 255)
     h, w = lbl.shape
     for n, b in zip(result.normals.tolist(), result.offsets.tolist()):
         d = np.array([-n[1], n[0]])

@@ -41,20 +41,34 @@ def _bgr(image: torch.Tensor) -> np.ndarray:
     return np.ascontiguousarray(a[..., ::-1] if a.shape[2] == 3 else np.repeat(a, 3, 2))
 
 
-def _pairs_picture(result: SymmetryMapResult) -> np.ndarray:
+def _pairs_picture(result: SymmetryMapResult, max_pairs: int = 40) -> np.ndarray:
+    """The image with each axis and at most ``max_pairs`` of its cluster's pairs in the
+    axis's colour, end points dotted; pairs of no cluster are left out."""
     import cv2
 
     img = _bgr(result.image).copy()
     colours = [(0, 0, 255), (0, 200, 0), (255, 0, 0), (0, 200, 255), (255, 0, 255), (255, 255, 0)]
-    for (x1, y1, x2, y2), c in zip(result.pairs.cpu().tolist(), result.pair_cluster.cpu().tolist()):
-        col = colours[c % len(colours)] if c >= 0 else (160, 160, 160)
-        cv2.line(img, (round(x1), round(y1)), (round(x2), round(y2)), col, 1 if c >= 0 else 1, cv2.LINE_AA)
+    pairs = result.pairs.detach().cpu().numpy()  # (P, 4)
+    cluster = result.pair_cluster.detach().cpu().numpy()  # (P,)
     h, w = img.shape[:2]
     for k, (a, b, c) in enumerate(result.lines.cpu().tolist()):
+        col = colours[k % len(colours)]
         d = np.array([-b, a])
         p0 = -c * np.array([a, b])
         ends = [p0 + t * d for t in (-2 * (h + w), 2 * (h + w))]
-        cv2.line(img, tuple(np.round(ends[0]).astype(int)), tuple(np.round(ends[1]).astype(int)), colours[k % len(colours)], 2, cv2.LINE_AA)
+        cv2.line(img, tuple(np.round(ends[0]).astype(int)), tuple(np.round(ends[1]).astype(int)), col, 2, cv2.LINE_AA)
+        mine = pairs[cluster == k]
+        if len(mine) > max_pairs:
+            mine = mine[np.linspace(0, len(mine) - 1, max_pairs).round().astype(int)]
+        for x1, y1, x2, y2 in mine:
+            p, q = (round(x1), round(y1)), (round(x2), round(y2))
+            cv2.line(img, p, q, col, 1, cv2.LINE_AA)
+            cv2.circle(img, p, 3, col, -1, cv2.LINE_AA)
+            cv2.circle(img, q, 3, col, -1, cv2.LINE_AA)
+        label = f"axis {k + 1}: {int((cluster == k).sum())} pairs"
+        (tw, th), _ = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
+        cv2.rectangle(img, (4, 6 + 24 * k), (12 + tw, 12 + th + 24 * k), (255, 255, 255), -1)
+        cv2.putText(img, label, (8, 8 + th + 24 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.6, col, 1, cv2.LINE_AA)
     return img
 
 
@@ -62,8 +76,8 @@ def _pairs_picture(result: SymmetryMapResult) -> np.ndarray:
 def write_symmetry_map(result: SymmetryMapResult, data: Any, out_dir: Path, stem: str) -> list[Path]:
     """Per axis ``h``: ``{stem}_nmrf{h}.png`` (HSV picture), ``{stem}_ssm{h}.png`` (grey),
     ``{stem}_im{h}.png`` (``Im = S I(f)``) and ``{stem}_nmrf{h}.npy`` (``(H, W, 2)`` float32
-    ``x, y``); ``{stem}_pairs.png`` (the candidate pairs coloured by cluster, grey for
-    outliers, and the axes). With no axis: ``{stem}_ssm.png``, all black."""
+    ``x, y``); ``{stem}_pairs.png`` (each axis with up to 40 of its
+    cluster's pairs in its colour). With no axis: ``{stem}_ssm.png``, all black."""
     import cv2
 
     out = Path(out_dir)

@@ -5,15 +5,16 @@ Each keypoint ``p_i`` is paired with the keypoints ``p_j`` whose descriptor is w
 up to ``n_matches`` of them, nearest first: a pixel may be symmetric about more than one
 axis. Descriptors are kornia's RootSIFT (:func:`torchsym.features.sift.detect_sift`) and
 the mirrored descriptors the exact bin permutation
-(:func:`torchsym.features.sift.mirror_descriptors`). A pair found from both ends is kept once.
+(:func:`torchsym.features.sift.mirror_descriptors`); the matching is
+:func:`torchsym.features.mirror_sift_knn`. A pair found from both ends is kept once.
 """
 
 from __future__ import annotations
 
 import torch
 
-from torchsym.features.mirror_pairs import mirror_distance_matrix
-from torchsym.features.sift import SIFT_MIN_SIDE, detect_sift
+from torchsym.features.mirror_pairs import mirror_sift_knn
+from torchsym.features.sift import SIFT_MIN_SIDE
 
 __all__ = ["mirror_sift_matches"]
 
@@ -44,17 +45,13 @@ def mirror_sift_matches(
     empty = (torch.zeros(0, 4, device=image.device), torch.zeros(0, device=image.device))
     if min(image.shape[-2:]) < SIFT_MIN_SIDE:
         return empty
-    feats = detect_sift(image, num_features=num_features)
+    feats, i, j, d = mirror_sift_knn(image, num_features=num_features, k=n_matches, min_pair_distance=min_pair_distance)
     if len(feats) < 2:
         return empty
-    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)  # (N, N)
-    k = min(n_matches, dist.shape[0] - 1)
-    vals, idx = dist.topk(k, dim=1, largest=False)  # (N, k)
-    rows = torch.arange(dist.shape[0], device=dist.device)[:, None].expand(-1, k)
-    keep = vals < max_distance
-    i, j, d = rows[keep], idx[keep], vals[keep]
+    keep = d < max_distance
+    i, j, d = i[keep], j[keep], d[keep]
     lo, hi = torch.minimum(i, j), torch.maximum(i, j)
-    key = lo * dist.shape[0] + hi
+    key = lo * len(feats) + hi
     key, first = _unique_first(key)
     lo, hi, d = lo[first], hi[first], d[first]
     order = d.argsort(stable=True)
