@@ -7,6 +7,7 @@ from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
 from torchsym.features.sift import SIFT_MIN_SIDE
+from torchsym.image.batching import check_sides
 
 __all__ = ["Clustering", "KSymmetrySettings", "MirrorPairs"]
 
@@ -18,6 +19,7 @@ class MirrorPairs(Settings):
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
     k1: int | None = setting(None, "neighbours of the mutual nearest-neighbour rule (Def. 2.2.1); null: at the elbow", low=1)
     min_distance: float = setting(5.0, "keypoints closer than this are not paired", unit="px", low=0.0)
+    backend: Literal["kornia", "opencv"] = setting("kornia", "SIFT's implementation: kornia, or OpenCV (CPU, faster)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,3 +51,8 @@ class KSymmetrySettings(Settings):
     )
     max_side: int | None = setting(640, "longest side an image is detected at (a scaled copy beyond); null: full size",
                                    unit="px", low=SIFT_MIN_SIDE)
+    min_side: int | None = setting(None, "longest side below which an image is detected on a scaled-up copy; null: "
+                                   "native size", unit="px", low=SIFT_MIN_SIDE)
+
+    def check(self) -> None:
+        check_sides(self.min_side, self.max_side)
