@@ -58,7 +58,7 @@ class SiftCandidates(Settings):
     enabled: bool | None = setting(None, "add them; null: with score gradient only (they need it)")
     weight: float = setting(0.5, "factor on their axes' scores", low=0.0, low_open=True)
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
-    backend: Literal["kornia", "opencv"] = setting("kornia", "SIFT's implementation: kornia, or OpenCV (CPU, faster)")
+    backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
 
 @dataclasses.dataclass(frozen=True)
