@@ -8,7 +8,7 @@ import kornia.feature as KF
 import pytest
 import torch
 
-from torchsym.errors import InputShapeError
+from torchsym.errors import InputShapeError, InputValueError
 from torchsym.features import detect_sift, mirror_descriptors, mirror_permutation
 from torchsym.image.synthetic import mirrored_objects_image
 
@@ -42,6 +42,33 @@ class TestDetectSift:
     def test_exception(self):
         with pytest.raises(InputShapeError, match="image: expected a single image"):
             detect_sift(torch.rand(2, 1, 64, 64))
+        with pytest.raises(InputValueError, match="backend: expected 'kornia' or 'opencv', got 'vlfeat'"):
+            detect_sift(torch.rand(1, 64, 64), backend="vlfeat")
+
+    def test_opencv_backend(self, image):
+        f = detect_sift(image, num_features=200, backend="opencv")
+        assert f.layout == "opencv" and 0 < len(f) <= 200
+        assert f.descriptors.shape == (len(f), 128) and f.lafs.shape == (len(f), 2, 3)
+        assert torch.allclose(f.descriptors.norm(dim=1), torch.ones(len(f)), atol=1e-4)  # RootSIFT: unit L2
+        assert torch.equal(f.lafs[:, :, 2], f.points)
+        assert len(detect_sift(torch.full((3, 64, 64), 0.3), backend="opencv")) == 0
+
+    def test_opencv_mirror_against_flipped_image(self, image):
+        """OpenCV's layout: the permuted descriptor is close to the one computed on the flipped image."""
+        import cv2
+
+        u8 = (image.mean(0) * 255).round().to(torch.uint8).numpy()
+        sift = cv2.SIFT_create()
+        kps, desc = sift.detectAndCompute(u8, None)
+        w = u8.shape[1]
+        flipped_kps = [cv2.KeyPoint(w - 1 - k.pt[0], k.pt[1], k.size, (180 - k.angle) % 360, k.response, k.octave)
+                       for k in kps]
+        flipped_kps, flipped = sift.compute(u8[:, ::-1].copy(), flipped_kps)
+        assert len(flipped_kps) == len(kps)
+        d, fd = torch.from_numpy(desc), torch.from_numpy(flipped)
+        rel = lambda a: (a - fd).norm(dim=1) / d.norm(dim=1)  # noqa: E731
+        assert float(rel(mirror_descriptors(d, layout="opencv")).median()) < 0.3
+        assert float(rel(d).median()) > 0.5
 
 
 class TestMirrorPermutation:

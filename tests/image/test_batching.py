@@ -48,6 +48,17 @@ class TestMaxSide:
         assert solver(max_side=2000)(img).info.get("working_size") is None  # smaller than max_side: untouched
 
     @pytest.mark.parametrize("name", ["boundary_cliques", "ksymmetry"])
+    def test_small_image_detected_on_a_larger_copy(self, name):
+        img, truth = mirrored_objects_image(1, height=120, width=160, generator=torch.Generator().manual_seed(2))
+        solver = torchsym.SOLVERS.get(name).cls
+        res = solver(min_side=320)(img)
+        assert res.image_size == (120, 160) and res.info["working_size"] == (240, 320)
+        assert bool((res.axes[:, [0, 2]] <= 159 + 1e-3).all() and (res.axes[:, [1, 3]] <= 119 + 1e-3).all())
+        assert solver(min_side=100)(img).info.get("working_size") is None  # larger than min_side: untouched
+        with pytest.raises(torchsym.errors.ConfigError, match="min_side: expected at most max_side"):
+            solver(min_side=800, max_side=640)
+
+    @pytest.mark.parametrize("name", ["boundary_cliques", "ksymmetry"])
     def test_strips_half_precision_and_small_images(self, name):
         solver = torchsym.SOLVERS.get(name).cls
         g = torch.Generator().manual_seed(0)

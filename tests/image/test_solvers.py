@@ -85,3 +85,40 @@ class TestRequiresGrad:
         img, _ = single_objects[0]
         res = fn(img.clone().requires_grad_(True))
         assert torch.equal(res.axes, fn(img).axes) and not res.axes.requires_grad
+
+
+def _smoothed_noise(seed: int) -> torch.Tensor:
+    """``(3, 240, 320)`` uniform noise blurred by a 7 x 7 box twice, stretched to [0, 1]."""
+    noise = torch.rand(1, 1, 240, 320, generator=torch.Generator().manual_seed(seed))
+    for _ in range(2):
+        noise = torch.nn.functional.avg_pool2d(noise, 7, stride=1, padding=3, count_include_pad=False)
+    noise = (noise - noise.min()) / (noise.max() - noise.min())
+    return noise[0].expand(3, -1, -1).contiguous()
+
+
+SCORE_MODES = [
+    (boundary_clique_axes, {}),
+    (boundary_clique_axes, {"score": "support", "edges": {"detector": "canny"}, "theta": 5.0}),
+    (boundary_clique_axes, {"score": "photometric"}),
+    (ksymmetry_axes, {}),
+    (ksymmetry_axes, {"score": "gradient"}),
+]
+
+
+class TestScores:
+    """Scores rank axes across photographs: bounded, and low on smoothed noise."""
+
+    @pytest.mark.parametrize(("fn", "kw"), SCORE_MODES)
+    def test_in_unit_interval(self, fn, kw, three_objects):
+        res = fn(three_objects[0], **kw)
+        assert len(res) >= 1 and bool(((res.scores >= 0) & (res.scores <= 1)).all())
+
+    @pytest.mark.parametrize(("fn", "kw"), SCORE_MODES)
+    def test_smoothed_noise_scores_low(self, fn, kw):
+        for seed in range(2):
+            res = fn(_smoothed_noise(seed), **kw)
+            assert bool((res.scores < 0.3).all()), (seed, res.scores.tolist())
+
+    def test_symmetric_object_beats_noise(self, single_objects):
+        img, _ = single_objects[0]
+        assert float(boundary_clique_axes(img).scores[0]) > 0.3

@@ -53,13 +53,16 @@ def elbow_index(values: torch.Tensor) -> int:
     return int(dist.argmax())
 
 
-def mirror_distance_matrix(descriptors: torch.Tensor, points: torch.Tensor, *, min_distance: float = 0.0) -> torch.Tensor:
-    """``(N, N)`` distances ``|m_j - d_i|``; the diagonal and pairs closer than ``min_distance`` pixels are ``inf``."""
+def mirror_distance_matrix(
+    descriptors: torch.Tensor, points: torch.Tensor, *, min_distance: float = 0.0, layout: str = "kornia"
+) -> torch.Tensor:
+    """``(N, N)`` distances ``|m_j - d_i|``; the diagonal and pairs closer than ``min_distance``
+    pixels are ``inf``. ``layout``: the descriptors' (:func:`~torchsym.features.sift.mirror_permutation`)."""
     if descriptors.dim() != 2 or points.dim() != 2 or descriptors.shape[0] != points.shape[0]:
         raise InputShapeError(
             f"descriptors: expected (N, 128) matching points (N, 2), got {tuple(descriptors.shape)} and {tuple(points.shape)}"
         )
-    mir = mirror_descriptors(descriptors)  # (N, 128)
+    mir = mirror_descriptors(descriptors, layout=layout)  # (N, 128)
     dist = torch.cdist(descriptors.float(), mir.float())  # (N, N)
     dist = 0.5 * (dist + dist.T)  # exact up to rounding, see module docstring
     near = torch.cdist(points.float(), points.float()) < max(min_distance, 1e-6)  # (N, N), includes the diagonal

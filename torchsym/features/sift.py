@@ -50,7 +50,9 @@ class SiftFeatures(Result):
         scales: ``(N,)`` keypoint scales in pixels.
         orientations: ``(N,)`` orientations in radians (kornia's LAF convention).
         responses: ``(N,)`` detector responses, all > 0.
-        descriptors: ``(N, 128)`` (Root)SIFT descriptors in kornia's layout.
+        descriptors: ``(N, 128)`` RootSIFT descriptors in ``layout``.
+        layout: the descriptors' bin layout (:func:`mirror_permutation`): ``"kornia"``
+            or ``"opencv"``.
     """
 
     lafs: torch.Tensor
@@ -59,6 +61,7 @@ class SiftFeatures(Result):
     orientations: torch.Tensor
     responses: torch.Tensor
     descriptors: torch.Tensor
+    layout: str = "kornia"
 
     def __len__(self) -> int:
         return int(self.points.shape[0])
@@ -69,8 +72,8 @@ def _sift_module(num_features: int) -> KF.SIFTFeature:
     return KF.SIFTFeature(num_features=num_features, upright=False, rootsift=True).eval()
 
 
-def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeatures:
-    """Detect SIFT keypoints and describe them with kornia's ``SIFTFeature``.
+def detect_sift(image: torch.Tensor, *, num_features: int = 1000, backend: str = "kornia") -> SiftFeatures:
+    """Detect SIFT keypoints and describe them with kornia's ``SIFTFeature`` or OpenCV's SIFT.
 
     Padded entries (response zero, which kornia returns when fewer than
     ``num_features`` keypoints exist) are dropped. kornia describes ``num_features``
@@ -80,9 +83,12 @@ def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeature
     Args:
         image: ``(C, H, W)`` or ``(1, C, H, W)`` float image in [0, 1], ``C`` in {1, 3}.
         num_features: the most keypoints kept (strongest responses).
+        backend: ``"kornia"`` (default; differentiable pipeline, any device) or
+            ``"opencv"`` (``cv2.SIFT``, on the CPU, an order of magnitude faster there;
+            orientations in OpenCV's convention, descriptors in its layout, RootSIFT).
 
     Returns:
-        :class:`SiftFeatures` in input-image pixels.
+        :class:`SiftFeatures` in input-image pixels (on the image's device).
 
     Example:
         >>> feats = detect_sift(torch.rand(1, 64, 64), num_features=50)
@@ -95,6 +101,10 @@ def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeature
     num_features = check_int(num_features, "num_features", minimum=1)
     gray = img.float().mean(1, keepdim=True) if img.shape[1] == 3 else img.float()  # (1, 1, H, W)
     budget = min(num_features, max(16, gray.shape[-1] * gray.shape[-2] // 100))
+    if backend not in ("kornia", "opencv"):
+        raise InputValueError(f"backend: expected 'kornia' or 'opencv', got {backend!r}")
+    if backend == "opencv":
+        return _detect_opencv(gray[0, 0], budget)
     if float(gray.max() - gray.min()) < 1e-6:
         lafs = torch.zeros(1, 0, 2, 3)
         resp, desc = torch.zeros(1, 0), torch.zeros(1, 0, 128)
@@ -106,6 +116,30 @@ def detect_sift(image: torch.Tensor, *, num_features: int = 1000) -> SiftFeature
     scales = KF.get_laf_scale(lafs[None])[0, :, 0, 0]  # (N,)
     ori = torch.deg2rad(KF.get_laf_orientation(lafs[None])[0, :, 0])  # (N,)
     return SiftFeatures(lafs, lafs[:, :, 2].clone(), scales, ori, resp, desc)
+
+
+def _detect_opencv(gray: torch.Tensor, budget: int) -> SiftFeatures:
+    """:func:`detect_sift` by ``cv2.SIFT`` on ``gray (H, W)`` in [0, 1]: the ``budget``
+    strongest keypoints, RootSIFT descriptors in OpenCV's layout."""
+    import cv2
+
+    dev = gray.device
+    u8 = (gray.detach().float().clamp(0, 1) * 255).round().to(torch.uint8).cpu().numpy()
+    kps, desc = (cv2.SIFT_create(nfeatures=budget).detectAndCompute(u8, None) if u8.max() > u8.min() else ((), None))
+    if desc is None or len(kps) == 0:
+        z = torch.zeros(0, device=dev)
+        return SiftFeatures(torch.zeros(0, 2, 3, device=dev), torch.zeros(0, 2, device=dev), z, z, z,
+                            torch.zeros(0, 128, device=dev), "opencv")
+    kps = kps[:budget]
+    pts = torch.tensor([k.pt for k in kps], dtype=torch.float32)  # (N, 2)
+    scales = torch.tensor([k.size / 2 for k in kps], dtype=torch.float32)
+    ori = torch.deg2rad(torch.tensor([k.angle for k in kps], dtype=torch.float32))
+    resp = torch.tensor([max(k.response, 1e-12) for k in kps], dtype=torch.float32)
+    d = torch.from_numpy(desc[: len(kps)]).float()
+    d = torch.sqrt(d / d.sum(1, keepdim=True).clamp_min(1e-12))  # RootSIFT
+    c, s_ = torch.cos(ori) * scales, torch.sin(ori) * scales
+    lafs = torch.stack([torch.stack([c, -s_, pts[:, 0]], 1), torch.stack([s_, c, pts[:, 1]], 1)], 1)  # (N, 2, 3)
+    return SiftFeatures(*(t.to(dev) for t in (lafs, pts, scales, ori, resp, d)), "opencv")
 
 
 @functools.lru_cache(maxsize=8)

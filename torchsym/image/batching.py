@@ -1,7 +1,8 @@
-"""Batches and large images for the single-image axis detectors.
+"""Batches and image sizes for the single-image axis detectors.
 
 An image whose longer side exceeds ``max_side`` is detected on a copy scaled down to that
-side (antialiased) and the result mapped back to the input's pixels.
+side (antialiased), one whose longer side is below ``min_side`` on a copy scaled up to it
+(bilinear), and the result is mapped back to the input's pixels.
 """
 
 from __future__ import annotations
@@ -13,23 +14,38 @@ from typing import Any
 import torch
 
 from torchsym.core.checks import check_image
+from torchsym.errors import ConfigError
 from torchsym.features.sift import SIFT_MIN_SIDE
 from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult
 
-__all__ = ["run_batched", "to_input_pixels", "working_copy"]
+__all__ = ["check_sides", "run_batched", "to_input_pixels", "working_copy"]
 
 
-def working_copy(img: torch.Tensor, max_side: int | None) -> torch.Tensor:
-    """``img (B, C, H, W)`` scaled down so its longer side is ``max_side`` (itself when
-    it fits or ``max_side`` is None). The short side of a long strip stays at least
-    ``SIFT_MIN_SIDE`` (32); the bilinear antialiased filter keeps the input's range."""
+def check_sides(min_side: int | None, max_side: int | None) -> None:
+    """Raise :class:`~torchsym.errors.ConfigError` unless ``min_side <= max_side`` (None: no bound)."""
+    if min_side is not None and max_side is not None and min_side > max_side:
+        raise ConfigError(f"min_side: expected at most max_side ({max_side}), got {min_side}")
+
+
+def working_copy(img: torch.Tensor, max_side: int | None, min_side: int | None = None) -> torch.Tensor:
+    """``img (B, C, H, W)`` scaled so its longer side lies in ``[min_side, max_side]``
+    (itself when it does, or a bound is None). Scaling down, the short side of a long strip
+    stays at least ``SIFT_MIN_SIDE`` (32); the bilinear (antialiased when shrinking) filter
+    keeps the input's range."""
     height, width = int(img.shape[-2]), int(img.shape[-1])
-    if max_side is None or max(height, width) <= max_side:
+    long = max(height, width)
+    if max_side is not None and long > max_side:
+        scale = max_side / long
+        size = tuple(min(side, max(SIFT_MIN_SIDE, round(side * scale))) for side in (height, width))
+    elif min_side is not None and long < min_side:
+        scale = min_side / long
+        size = tuple(max(side, round(side * scale)) for side in (height, width))
+    else:
         return img
-    scale = max_side / max(height, width)
-    size = tuple(min(side, max(SIFT_MIN_SIDE, round(side * scale))) for side in (height, width))
     src = img if img.dtype in (torch.float32, torch.float64) else img.float()  # antialias: float32/64 only
-    return torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=True)
+    shrink = size[0] < height or size[1] < width
+    out = torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=shrink)
+    return out if shrink else out.clamp(0, 1)
 
 
 def to_input_pixels(res: ReflectionAxesResult, height: int, width: int) -> ReflectionAxesResult:
@@ -59,7 +75,8 @@ def to_input_pixels(res: ReflectionAxesResult, height: int, width: int) -> Refle
 
 
 def run_batched(
-    detect_one: Callable[..., ReflectionAxesResult], image: Any, max_side: int | None, **kwargs: Any
+    detect_one: Callable[..., ReflectionAxesResult], image: Any, max_side: int | None, min_side: int | None = None,
+    **kwargs: Any,
 ) -> ReflectionAxesResult | ReflectionAxesBatch:
     """``detect_one(image (1, C, H, W), **kwargs)`` on each image of ``image``.
 
@@ -67,14 +84,15 @@ def run_batched(
         detect_one: a single-image detector.
         image: ``(C, H, W)`` or ``(B, C, H, W)`` (or ``(H, W)``), checked by
             :func:`~torchsym.core.checks.check_image`.
-        max_side: the longest side an image is detected at, px (None: full size).
+        max_side: the longest side an image is detected at, px (None: no limit).
+        min_side: the shortest longer side an image is detected at, px (None: no limit).
 
     Returns:
         A :class:`ReflectionAxesResult` for one image, else a :class:`ReflectionAxesBatch`.
     """
     img = check_image(image, "image", min_size=16)
     height, width = int(img.shape[-2]), int(img.shape[-1])
-    work = working_copy(img, max_side)
+    work = working_copy(img, max_side, min_side)
 
     def one(b: int) -> ReflectionAxesResult:
         res = detect_one(work[b : b + 1], **kwargs)

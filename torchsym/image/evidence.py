@@ -106,10 +106,13 @@ class AxisEvidence(Result):
     extent: tuple[float, float]
     kept: tuple[int, ...] | None = None
 
-    def score(self, support: int) -> float:
-        """The axis score of both methods' ``score="gradient"``: ``symmetry * sqrt(area) *
-        log(1 + support)`` (negative symmetry counts as 0), for ``support`` mirror pairs."""
-        return max(self.symmetry, 0.0) * math.sqrt(max(self.area, 0.0)) * math.log1p(support)
+    @property
+    def score(self) -> float:
+        """The axis score of both methods' ``score="gradient"``, in [0, 1]: ``symmetry *
+        sqrt(area)`` (negative symmetry counts as 0). Both factors are ratios, so the score
+        does not grow with the image's size or edge density: a band of smoothed noise
+        mirrors little of its gradient energy, a small symmetric detail covers little."""
+        return max(self.symmetry, 0.0) * math.sqrt(min(max(self.area, 0.0), 1.0))
 
 
 def _grow(

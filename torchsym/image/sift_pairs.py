@@ -12,7 +12,8 @@ __all__ = ["mirror_sift_pairs"]
 
 
 def mirror_sift_pairs(
-    image: torch.Tensor, *, max_keypoints: int = 1000, k1: int | None = None, min_pair_distance: float = 5.0
+    image: torch.Tensor, *, max_keypoints: int = 1000, k1: int | None = None, min_pair_distance: float = 5.0,
+    backend: str = "kornia",
 ) -> tuple[torch.Tensor, int]:
     """Mirror symmetric pixel pairs of an image from SIFT and mirrored SIFT (Sec. 2.2.1).
 
@@ -25,6 +26,7 @@ def mirror_sift_pairs(
         max_keypoints: the most SIFT keypoints (default 1000).
         k1: neighbours in the mutual nearest-neighbour rule; None chooses it.
         min_pair_distance: keypoints closer than this (pixels) are not paired.
+        backend: SIFT's (:func:`~torchsym.features.sift.detect_sift`): ``"kornia"`` or ``"opencv"``.
 
     Returns:
         ``pairs (P, 4)`` float64 ``x1, y1, x2, y2`` in pixels, on the image's device, and
@@ -33,10 +35,10 @@ def mirror_sift_pairs(
     min_pair_distance = check_positive(min_pair_distance, "min_pair_distance", allow_zero=True)
     if k1 is not None:
         k1 = check_int(k1, "k1", minimum=1)
-    feats = detect_sift(image, num_features=max_keypoints)
+    feats = detect_sift(image, num_features=max_keypoints, backend=backend)
     if len(feats) < 2:
         return torch.zeros(0, 4, dtype=torch.float64, device=feats.points.device), 0
-    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)
+    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance, layout=feats.layout)
     if k1 is None:
         k1 = choose_k1(dist)
     idx = mutual_knn_pairs(dist, k1)  # (P, 2)

@@ -64,15 +64,15 @@ def verify_axis(
     field: GradientField, line: np.ndarray, pairs: np.ndarray, members: np.ndarray, *, weight: float = 1.0, **evidence: Any
 ) -> Axis:
     """``line`` checked by :func:`~torchsym.image.evidence.axis_evidence` on its supporting
-    ``pairs[members]`` (``pairs (P, 4)``): score ``weight * symmetry * sqrt(area) * log(1 +
-    M)`` and the grown extent; ``members`` cut to the pairs the evidence kept.
+    ``pairs[members]`` (``pairs (P, 4)``): score ``weight * symmetry * sqrt(area)`` (in [0,
+    1] for ``weight <= 1``) and the grown extent; ``members`` cut to the pairs the evidence kept.
 
     ``evidence``: settings of ``axis_evidence`` (``grow_threshold``, ``min_half_width``...).
     """
     ev = axis_evidence(field.gx, field.gy, line, pairs[members], noise_level=field.noise, **evidence)
     if ev.kept is not None:  # cut at empty background
         members = members[list(ev.kept)]
-    return Axis(line, members, weight * ev.score(members.size), ev.extent)
+    return Axis(line, members, weight * ev.score, ev.extent)
 
 
 def finish_axes(

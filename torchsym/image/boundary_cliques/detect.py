@@ -72,7 +72,7 @@ def boundary_clique_axes(
     """
     settings = resolve_settings(BoundaryCliquesSettings, settings, overrides)
     generator = generator if generator is not None else make_generator(settings.seed)
-    return run_batched(_detect, image, settings.max_side, settings=settings, generator=generator)
+    return run_batched(_detect, image, settings.max_side, settings.min_side, settings=settings, generator=generator)
 
 
 def _detect(image: torch.Tensor, settings: BoundaryCliquesSettings, generator: torch.Generator) -> ReflectionAxesResult:
@@ -109,7 +109,7 @@ def _detect(image: torch.Tensor, settings: BoundaryCliquesSettings, generator: t
     axes, all_pairs, distance = found.axes, pairs.pairs, None
     if settings.use_sift:  # score == "gradient" (checked): every axis has an extent
         tic = time.perf_counter()
-        sift_pairs = mirror_sift_pairs(img, max_keypoints=settings.sift.max_keypoints)[0].cpu().numpy()  # (P, 4)
+        sift_pairs = mirror_sift_pairs(img, max_keypoints=settings.sift.max_keypoints, backend=settings.sift.backend)[0].cpu().numpy()  # (P, 4)
         sift_axes = _sift_axes(sift_pairs, field, settings, h, w, offset=len(pairs))
         axes, all_pairs, distance = axes + sift_axes, np.concatenate([all_pairs, sift_pairs]), tol
         info.update(n_sift_pairs=int(sift_pairs.shape[0]), sift_axes=len(sift_axes))
@@ -146,12 +146,13 @@ def _score_axis(
     line: np.ndarray, members: np.ndarray, *, pairs: np.ndarray, gray: np.ndarray, field: GradientField | None,
     settings: BoundaryCliquesSettings,
 ) -> Axis:
-    """A clique's axis scored as ``settings.score`` says (``support``: its pairs;
-    ``photometric``: pairs x mirror correlation; ``gradient``: :func:`verify_axis`)."""
+    """A clique's axis scored as ``settings.score`` says, in [0, 1] (``support``: the
+    fraction of the image's symmetric pairs it holds; ``photometric``: that x mirror
+    correlation; ``gradient``: :func:`verify_axis`)."""
     if settings.score == "gradient":
         return verify_axis(field, line, pairs, members, min_half_width=settings.segments.length / 3,
                            grow_threshold=settings.grow_threshold)
-    value = float(members.size)
+    value = members.size / max(len(pairs), 1)
     if settings.score == "photometric":
         value *= max(0.0, mirror_correlation(gray, line, pairs[members].reshape(-1, 2)))
     return Axis(line, members, value)

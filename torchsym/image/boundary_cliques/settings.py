@@ -8,6 +8,7 @@ from typing import Literal
 from torchsym.core.settings import Settings, group, setting
 from torchsym.errors import ConfigError
 from torchsym.features.sift import SIFT_MIN_SIDE
+from torchsym.image.batching import check_sides
 
 __all__ = ["BoundaryCliquesSettings", "Cliques", "Edges", "Segments", "SiftCandidates"]
 
@@ -57,6 +58,7 @@ class SiftCandidates(Settings):
     enabled: bool | None = setting(None, "add them; null: with score gradient only (they need it)")
     weight: float = setting(0.5, "factor on their axes' scores", low=0.0, low_open=True)
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
+    backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,9 +83,12 @@ class BoundaryCliquesSettings(Settings):
     sift: SiftCandidates = group(SiftCandidates)
     max_side: int | None = setting(640, "longest side an image is detected at (a scaled copy beyond); null: full size",
                                    unit="px", low=SIFT_MIN_SIDE)
+    min_side: int | None = setting(None, "longest side below which an image is detected on a scaled-up copy; null: "
+                                   "native size", unit="px", low=SIFT_MIN_SIDE)
     seed: int = setting(0, "seed of the random subset of boundary pairs", low=0)
 
     def check(self) -> None:
+        check_sides(self.min_side, self.max_side)
         if self.sift.enabled and self.score != "gradient":
             raise ConfigError(
                 f"sift.enabled: needs score='gradient' (its axes are ranked by their evidence), got score={self.score!r}"

@@ -60,7 +60,7 @@ def ksymmetry_axes(
         4
     """
     settings = resolve_settings(KSymmetrySettings, settings, overrides)
-    return run_batched(_detect, image, settings.max_side, settings=settings)
+    return run_batched(_detect, image, settings.max_side, settings.min_side, settings=settings)
 
 
 def _detect(image: torch.Tensor, settings: KSymmetrySettings) -> ReflectionAxesResult:
@@ -69,7 +69,8 @@ def _detect(image: torch.Tensor, settings: KSymmetrySettings) -> ReflectionAxesR
     h, w = int(img.shape[-2]), int(img.shape[-1])
     t0 = time.perf_counter()
     sp = settings.pairs
-    pairs, k1 = mirror_sift_pairs(img, max_keypoints=sp.max_keypoints, k1=sp.k1, min_pair_distance=sp.min_distance)  # (P, 4)
+    pairs, k1 = mirror_sift_pairs(img, max_keypoints=sp.max_keypoints, k1=sp.k1, min_pair_distance=sp.min_distance,
+                                 backend=sp.backend)  # (P, 4)
     # SIFT ran on the image's device; the clustering and the evidence run on the CPU
     pairs, img = pairs.cpu(), img.cpu()
     if pairs.shape[0] == 0 and k1 == 0:
@@ -88,7 +89,7 @@ def _detect(image: torch.Tensor, settings: KSymmetrySettings) -> ReflectionAxesR
     )
     info: dict[str, Any] = dict(k1=k1, k=run.k, cost_curve=run.cost_curve, n_iter=run.iterations)
     if settings.score == "support":
-        axes = _cluster_axes(run, centre, scale, settings.min_support)
+        axes = _cluster_axes(run, pairs.numpy(), centre, scale, settings.min_support, GATHER_DISTANCE * max(h, w))
         info["seconds"] = time.perf_counter() - t0
         return finish_axes(axes, pairs, h, w, "ksymmetry", converged=run.converged, info=info)
     axes, evidence_free = _verified_runs(run, pairs.numpy(), img, centre, scale, settings)
@@ -109,9 +110,18 @@ def _cluster_lines(run: ClusteringRun, centre: torch.Tensor, scale: float, min_s
         yield line / line[:2].norm().clamp_min(1e-12), sup
 
 
-def _cluster_axes(run: ClusteringRun, centre: torch.Tensor, scale: float, min_support: int) -> list[Axis]:
-    """One axis per cluster, scored by its number of pairs (the thesis's ranking)."""
-    return [Axis(line.numpy(), sup.numpy(), float(sup.numel())) for line, sup in _cluster_lines(run, centre, scale, min_support)]
+def _cluster_axes(
+    run: ClusteringRun, pairs: np.ndarray, centre: torch.Tensor, scale: float, min_support: int, tol: float
+) -> list[Axis]:
+    """One axis per cluster, scored by its support (the thesis's ranking) as a fraction in
+    [0, 1]: the share of all ``pairs (P, 4)`` that are inliers of its line (chord within
+    ``GATHER_ANGLE`` of the normal, midpoint within ``tol`` px). Clustering assigns every
+    pair to some axis; counting inliers keeps a cluster of stray pairs low."""
+    out = []
+    for line, sup in _cluster_lines(run, centre, scale, min_support):
+        inliers = int(pixel_inliers(pairs, line.numpy()[None], GATHER_ANGLE, tol)[:, 0].sum())
+        out.append(Axis(line.numpy(), sup.numpy(), inliers / pairs.shape[0]))
+    return out
 
 
 def _verified_runs(

@@ -7,6 +7,7 @@ from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
 from torchsym.features.sift import SIFT_MIN_SIDE
+from torchsym.image.batching import check_sides
 
 __all__ = ["Clustering", "KSymmetrySettings", "MirrorPairs"]
 
@@ -18,6 +19,7 @@ class MirrorPairs(Settings):
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
     k1: int | None = setting(None, "neighbours of the mutual nearest-neighbour rule (Def. 2.2.1); null: at the elbow", low=1)
     min_distance: float = setting(5.0, "keypoints closer than this are not paired", unit="px", low=0.0)
+    backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,10 +44,15 @@ class KSymmetrySettings(Settings):
     clustering: Clustering = group(Clustering)
     min_support: int = setting(3, "axes supported by fewer pairs are dropped", low=1)
     score: Literal["support", "gradient"] = setting(
-        "support", "support: pairs per cluster (thesis); gradient: runs checked by mirrored gradients"
+        "gradient", "gradient: runs checked by mirrored gradients; support: share of the pairs (thesis)"
     )
     grow_threshold: float | None = setting(
         0.3, "with score gradient: local symmetry above which a segment grows; null: no growth", low=-1.0, high=1.0
     )
     max_side: int | None = setting(640, "longest side an image is detected at (a scaled copy beyond); null: full size",
                                    unit="px", low=SIFT_MIN_SIDE)
+    min_side: int | None = setting(None, "longest side below which an image is detected on a scaled-up copy; null: "
+                                   "native size", unit="px", low=SIFT_MIN_SIDE)
+
+    def check(self) -> None:
+        check_sides(self.min_side, self.max_side)
