@@ -16,7 +16,7 @@ from torchsym.optim import trust_region
 from torchsym.pointset import transform as tf
 from torchsym.pointset.assignment import mirror_assignment
 
-__all__ = ["Alternation", "AlternationRun", "alternate", "assign", "best_run", "mirror_score", "start_variables"]
+__all__ = ["Alternation", "AlternationRun", "alternate", "assign", "best_run", "mirror_score", "reflect_points", "start_variables"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,7 +64,8 @@ def start_variables(normal: np.ndarray, point: np.ndarray) -> tuple:
     return (*tf.rotations_from_normal(torch.from_numpy(normal)), torch.from_numpy(point).clone())
 
 
-def _reflect(x_np: np.ndarray, var) -> np.ndarray:
+def reflect_points(x_np: np.ndarray, var) -> np.ndarray:
+    """``(N, D)`` points reflected by the variables ``var = (R_1, .., R_{D-1}, t)``."""
     *rots, t = var
     s = tf.reflection_from_rotations(rots).numpy()
     t = t.numpy()
@@ -75,7 +76,7 @@ def assign(problem: Alternation, var) -> tuple[np.ndarray, np.ndarray]:
     """Step 2: the mirror of every point under the reflection ``var`` (Sec. 7.2.3)."""
     return mirror_assignment(
         problem.points,
-        _reflect(problem.points, var),
+        reflect_points(problem.points, var),
         n_matches=problem.n_matches,
         method=problem.method,
         n_neighbors=problem.n_neighbors,
@@ -142,6 +143,6 @@ def best_run(problem: Alternation, starts, best: AlternationRun | None = None) -
 
 
 def mirror_score(perm: np.ndarray, dist2: np.ndarray, h: float) -> float:
-    """Mean over all points of ``exp(-dist2 / (2 h^2))``, unmatched points counting 0; in [0, 1]."""
+    """The scan's trigger (not the result's score): mean over all points of ``exp(-dist2 / (2 h^2))``, unmatched points counting 0; in [0, 1]."""
     matched = perm >= 0
     return float(np.where(matched, np.exp(-0.5 * np.where(matched, dist2, 0.0) / h**2), 0.0).mean())
