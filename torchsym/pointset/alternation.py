@@ -11,6 +11,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.geometry import plane_from_pairs
 from torchsym.manifolds import ProductManifold
 from torchsym.optim import trust_region
 from torchsym.pointset import transform as tf
@@ -34,6 +35,8 @@ class Alternation:
         n_matches: most matched points (``2k`` of Sec. 7.4.4), None for all.
         n_neighbors: candidate mirrors per point of the sparse assignment.
         max_iters: most alternations.
+        closed_form: fit step 3 in closed form (the least-squares reflection of the pairs,
+            :func:`~torchsym.geometry.plane_from_pairs`) instead of the trust region.
     """
 
     points: np.ndarray
@@ -44,6 +47,7 @@ class Alternation:
     n_matches: int | None
     n_neighbors: int
     max_iters: int
+    closed_form: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,6 +104,8 @@ def fit_reflection(problem: Alternation, var, perm: np.ndarray):
     """Step 3: ``(R, t)`` for fixed correspondences by the Riemannian trust region (Sec. 7.2.2),
     warm-started from ``var``; returns the new variables and the cost."""
     matched = perm >= 0
+    if problem.closed_form:
+        return _fit_closed_form(problem, var, perm)
     weights = torch.from_numpy(matched.astype(np.float64))
     mirrors = problem.points_t[torch.from_numpy(np.where(matched, perm, 0))]
     st = tf.pair_statistics(problem.points_t, mirrors, weights)
@@ -113,6 +119,21 @@ def fit_reflection(problem: Alternation, var, perm: np.ndarray):
         max_iter=100,
     )
     return res.x, res.cost
+
+
+def _fit_closed_form(problem: Alternation, var, perm: np.ndarray):
+    """Step 3 in closed form: the least-squares reflection of the matched pairs (the global
+    minimum of Eq. 7.5 for fixed ``P``), its normal on the side of ``var``'s."""
+    matched = perm >= 0
+    x = problem.points_t[torch.from_numpy(matched)]
+    y = problem.points_t[torch.from_numpy(perm[matched])]
+    normal, offset = plane_from_pairs(x, y)
+    *rots, _ = var
+    if float(normal @ tf.normal_from_rotations(rots)) < 0:
+        normal, offset = -normal, -offset
+    new = start_variables(normal.numpy(), -float(offset) * normal.numpy())
+    cost = float(((reflect_points(x.numpy(), new) - y.numpy()) ** 2).sum())
+    return new, cost
 
 
 def alternate(problem: Alternation, var) -> AlternationRun:

@@ -59,6 +59,9 @@ class PointSymmSettings(Settings):
     """Settings of :func:`~torchsym.pointset.point_symm` (thesis Ch. 7, Algorithm 7)."""
 
     max_iters: int = setting(50, "alternations of the correspondences and (R, t) ('till convergence')", low=1)
+    max_trust_region_dim: int = setting(
+        16, "largest D whose (R, t) step runs the trust region (Sec. 7.2.2); above it, the closed-form least-squares reflection", low=2
+    )
     match_fraction: float = setting(1.0, "largest fraction of points that get a mirror (Sec. 7.4.4)", low=0.0, high=1.0, low_open=True)
     init: InitSettings = group(InitSettings)
     scan: ScanSettings = group(ScanSettings)

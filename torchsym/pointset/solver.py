@@ -148,6 +148,7 @@ def _problem(xn: np.ndarray, tree: cKDTree, settings: PointSymmSettings) -> Alte
     return Alternation(
         points=xn, points_t=torch.from_numpy(xn), tree=tree, manifold=tf.rotation_manifold(d), method=method,
         n_matches=n_matches, n_neighbors=a.n_neighbors, max_iters=settings.max_iters,
+        closed_form=d > settings.max_trust_region_dim,
     )
 
 
