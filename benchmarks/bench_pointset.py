@@ -255,11 +255,12 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3, kde=False, bayes=False):
     5 deg off and yet has a lower symmetry error than the optimum reached from the truth:
     no search can fix those, only another objective.
     """
-    ours, oracle, from_truth, wrong_but_better, ml, no_scan, post = [], [], [], 0, [], [], []
+    ours, oracle, from_truth, wrong_but_better, ml, no_scan, post, hard = [], [], [], 0, [], [], [], []
     for k in range(n_sets):
         s = planted(n, d, sigma2, seed=500 + k)
         r = point_symm(s.points)
         no_scan.append(float(normal_angle_error(point_symm(s.points, scan={"enabled": False}).normal, s.normal)))
+        hard.append(float(normal_angle_error(point_symm(s.points, soft={"enabled": False}).normal, s.normal)))
         t = point_symm(s.points, initial=(s.normal, s.offset))
         if kde:
             nrm_ml = kde_ml_plane(s.points.double().numpy(), s.normal.double().numpy(), float(s.offset), sigma2)
@@ -282,6 +283,7 @@ def oracle_target(n_sets, sigma2=0.01, n=300, d=3, kde=False, bayes=False):
         "sigma2": sigma2,
         "median_error_deg": statistics.median(ours),
         "no_scan_median_error_deg": statistics.median(no_scan),
+        "hard_median_error_deg": statistics.median(hard),
         "within_5deg": sum(e < 5.0 for e in ours),
         "no_scan_within_5deg": sum(e < 5.0 for e in no_scan),
         "oracle_median_error_deg": statistics.median(oracle),
@@ -499,18 +501,23 @@ def to_markdown(res) -> str:
         ),
         "",
         (
-            "Every noise level of the target, same protocol (15 sets each; \"no scan\": `scan.enabled=False`, the pair search's "
-            "starts alone, as before the scan of planes through the centroid and the principal axes was added):"
+            "Every noise level of the target, same protocol (15 sets each, seeds 500-514; \"no scan\": `scan.enabled=False`, "
+            "the pair search's starts alone; \"hard\": `soft.enabled=False`, the plane of the hard correspondences, "
+            "without the soft-correspondence refinement); sigma^2 = 0.005 is held out (no setting was chosen on it):"
         ),
         "",
-        "| sigma^2 | median normal error (deg) | within 5 deg | no scan: median (deg) | no scan: within 5 deg | oracle (deg) | ratio "
-        "| Bayes posterior mean (deg) | Bayes / oracle |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| sigma^2 | median normal error (deg) | within 5 deg | hard: median (deg) | no scan: median (deg) | no scan: within 5 deg "
+        "| oracle (deg) | ratio | Bayes posterior mean (deg) | Bayes / oracle | ours / Bayes |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
         *(
-            f"| {r['sigma2']} | {r['median_error_deg']:.3f} | {r['within_5deg']} | {r['no_scan_median_error_deg']:.3f} | "
+            f"| {r['sigma2']} | {r['median_error_deg']:.3f} | {r['within_5deg']} | {r['hard_median_error_deg']:.3f} | "
+            f"{r['no_scan_median_error_deg']:.3f} | "
             f"{r['no_scan_within_5deg']} | {r['oracle_median_error_deg']:.3f} | {r['ratio']:.2f} | "
-            + (f"{r['bayes_median_error_deg']:.3f} | {r['bayes_ratio']:.2f} |" if "bayes_ratio" in r else "- | - |")
-            for r in [*res["oracle_smaller_noise"], res["oracle"]]
+            + (
+                f"{r['bayes_median_error_deg']:.3f} | {r['bayes_ratio']:.2f} | {r['median_error_deg'] / r['bayes_median_error_deg']:.2f} |"
+                if "bayes_ratio" in r else "- | - | - |"
+            )
+            for r in [*res["oracle_smaller_noise"], res["held_out"], res["oracle"]]
         ),
         "",
         (
@@ -571,6 +578,7 @@ def main() -> None:
     res["exact"] = exact_target([2, 3, 6, 8], [50, 150, 300], 2 if q else 4)
     res["oracle"] = oracle_target(5 if q else 15, kde=True, bayes=True)
     res["oracle_smaller_noise"] = [oracle_target(5 if q else 15, sigma2=s2, bayes=s2 >= 1e-3) for s2 in (1e-4, 1e-3, 3e-3)]
+    res["held_out"] = oracle_target(5 if q else 15, sigma2=0.005)
     res["init"] = init_comparison([2, 3, 6], [0.0, 1e-4, 1e-3], 4 if q else 8)
     res["machine_floor_s"] = machine_floor()
     res["timing"] = timing([500, 2000, 10000], 1 if q else 3)
@@ -594,6 +602,21 @@ def main() -> None:
                 for r in [*res["oracle_smaller_noise"], o]
             ),
             "met": all(r["ratio"] <= 1.5 for r in [*res["oracle_smaller_noise"], o]),
+        },
+        {
+            "target": "median normal error <= 1.25x the Bayes posterior mean at sigma^2 = 1e-3, 3e-3, 1e-2 (n = 300, 3-D)",
+            "measured": "; ".join(
+                f"{r['sigma2']}: {r['median_error_deg']:.3f} vs {r['bayes_median_error_deg']:.3f} deg "
+                f"(x{r['median_error_deg'] / r['bayes_median_error_deg']:.2f})"
+                for r in [*res["oracle_smaller_noise"], o] if "bayes_median_error_deg" in r
+            ) + (
+                f"; held out, sigma^2 = 0.005: {res['held_out']['median_error_deg']:.2f} vs oracle "
+                f"{res['held_out']['oracle_median_error_deg']:.2f} deg (x{res['held_out']['ratio']:.2f})"
+            ),
+            "met": all(
+                r["median_error_deg"] <= 1.25 * r["bayes_median_error_deg"]
+                for r in [*res["oracle_smaller_noise"], o] if "bayes_median_error_deg" in r
+            ),
         },
         {"target": "n = 500, 3-D <= 0.3 s (thesis 38.4 s)", "measured": f"{t[500]:.3f} s", "met": t[500] <= 0.3},
         {"target": "n = 10,000, 3-D <= 10 s", "measured": f"{t[10000]:.2f} s", "met": t[10000] <= 10.0},

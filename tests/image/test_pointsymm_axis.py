@@ -68,3 +68,25 @@ class TestPointSymmImage:
 
         pipe = torchsym.build_pipeline(Path(__file__).resolve().parents[2] / "configs" / "image_pointsymm.yaml")
         assert isinstance(pipe(symmetric_image(0)), ImageAxisResult)
+
+
+@pytest.mark.slow
+class TestPointSymmImageScore:
+    """Issue 31: noise and smoothed noise score low, a mirrored image high."""
+
+    def test_noise_low(self):
+        g = torch.Generator().manual_seed(3)
+        assert point_symm_image(torch.rand(1, 64, 64, generator=g)).score < 0.3
+
+    def test_smoothed_noise_low(self):
+        g = torch.Generator().manual_seed(3)
+        noise = torch.rand(1, 1, 100, 100, generator=g)
+        smooth = torch.nn.functional.avg_pool2d(noise, 5, stride=1, padding=2)[0]
+        assert point_symm_image(smooth).score < 0.3
+
+    def test_symmetric_high(self):
+        assert point_symm_image(symmetric_image(0, clutter=False)).score > 0.7
+
+    def test_small_image_refused(self):
+        with pytest.raises(InputShapeError, match="image"):
+            point_symm_image(torch.rand(1, 16, 16))

@@ -42,3 +42,29 @@ class TestMirrorScore:
         dist2 = np.array([0.0, 0.0, np.inf, 1.0])
         assert mirror_score(perm, dist2, 1.0) == (2.0 + np.exp(-0.5)) / 4
         assert mirror_score(np.full(3, -1), np.full(3, np.inf), 1.0) == 0.0
+
+
+class TestClosedFormStep:
+    """Above ``max_trust_region_dim`` step 3 is the closed-form least-squares reflection."""
+
+    def test_same_plane_as_trust_region(self):
+        import torch
+
+        from torchsym.geometry import plane_angle
+        from torchsym.pointset import make_symmetric_pointset, point_symm
+
+        s = make_symmetric_pointset(60, 6, 1e-4, generator=torch.Generator().manual_seed(3))
+        tr = point_symm(s.points, soft={"enabled": False})
+        cf = point_symm(s.points, soft={"enabled": False}, max_trust_region_dim=2)
+        assert float(plane_angle(tr.normal, cf.normal)) < 1e-6
+        assert torch.equal(tr.permutation, cf.permutation)
+
+    def test_high_dimension_exact(self):
+        import torch
+
+        from torchsym.geometry import plane_angle
+        from torchsym.pointset import make_symmetric_pointset, point_symm
+
+        s = make_symmetric_pointset(80, 30, 0.0, generator=torch.Generator().manual_seed(4))
+        r = point_symm(s.points)
+        assert float(plane_angle(r.normal, s.normal)) < 1e-9 and r.score > 0.99

@@ -11,13 +11,14 @@ import torch
 from scipy.spatial import cKDTree
 
 from torchsym.core.checks import check_image
-from torchsym.core.random import DEFAULT_SEED, make_generator, random_subset
+from torchsym.core.random import DEFAULT_SEED, make_generator, numpy_rng, random_subset
 from torchsym.core.registry import register_solver
 from torchsym.core.results import Result, on_input_device
 from torchsym.core.settings import Settings, Solver, group, resolve_settings, setting
 from torchsym.errors import InputValueError
 from torchsym.features.harris import harris_corners
 from torchsym.pointset import PointSymmSettings, point_symm
+from torchsym.pointset.score import symmetry_score
 
 __all__ = ["ImageAxisResult", "PointSymmImage", "PointSymmImageSettings", "point_symm_image"]
 
@@ -65,7 +66,14 @@ class ImageAxisResult(Result):
         corners: ``(K, 2)`` the Harris corners ``(x, y)`` used as the point set.
         inliers: ``(K,)`` bool, corners whose reflection lands near another corner.
         permutation: ``(K,)`` int64, mirror corner of each inlier, -1 elsewhere.
-        score: fraction of corners that are inliers, in [0, 1].
+        score: in [0, 1], calibrated against chance
+            (:func:`~torchsym.pointset.score.symmetry_score`): ``q``, the mean over the
+            corners of ``max(0, 1 - r / min(nn, moved))`` (``r`` the distance from the
+            reflected corner to its mirror, inliers only, ``nn`` the distance to the corner's
+            nearest other corner, ``moved`` how far the reflection moves it), corrected by
+            its mean ``q_0`` under random axes: ``max(0, (q - q_0) / (1 - q_0))``. Noise gives
+            dense, evenly spaced corners whose reflections land near some corner by chance;
+            this score counts only what the axis does better than chance.
         iterations: RANSAC iterations run.
     """
 
@@ -100,10 +108,14 @@ def _segment(normal: np.ndarray, offset: float, width: int, height: int) -> np.n
     return pts[[far // len(pts), far % len(pts)]]
 
 
+def _reflect(corners: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+    """``(K, 2)`` the corners reflected in the axis ``normal . p + offset = 0``."""
+    return corners - 2.0 * (corners @ normal + offset)[:, None] * normal
+
+
 def _inliers(corners: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, threshold: float):
     """Corners whose reflection lands within ``threshold`` px of a corner, and that corner."""
-    moved = corners - 2.0 * (corners @ normal + offset)[:, None] * normal
-    dist, idx = tree.query(moved)
+    dist, idx = tree.query(_reflect(corners, normal, offset))
     return dist < threshold, idx
 
 
@@ -191,7 +203,7 @@ def point_symm_image(
         corners=corners_t,
         inliers=torch.from_numpy(inl),
         permutation=torch.as_tensor(perm, dtype=torch.int64),
-        score=float(inl.mean()),
+        score=symmetry_score(corners, _reflect(corners, nrm, off), perm, numpy_rng(g), tree=tree),
         iterations=settings.ransac.n_iters,
     )
 

@@ -11,12 +11,13 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.geometry import plane_from_pairs
 from torchsym.manifolds import ProductManifold
 from torchsym.optim import trust_region
 from torchsym.pointset import transform as tf
 from torchsym.pointset.assignment import mirror_assignment
 
-__all__ = ["Alternation", "AlternationRun", "alternate", "assign", "best_run", "mirror_score", "start_variables"]
+__all__ = ["Alternation", "AlternationRun", "alternate", "assign", "best_run", "mirror_score", "reflect_points", "start_variables"]
 
 logger = logging.getLogger(__name__)
 
@@ -34,6 +35,8 @@ class Alternation:
         n_matches: most matched points (``2k`` of Sec. 7.4.4), None for all.
         n_neighbors: candidate mirrors per point of the sparse assignment.
         max_iters: most alternations.
+        closed_form: fit step 3 in closed form (the least-squares reflection of the pairs,
+            :func:`~torchsym.geometry.plane_from_pairs`) instead of the trust region.
     """
 
     points: np.ndarray
@@ -44,6 +47,7 @@ class Alternation:
     n_matches: int | None
     n_neighbors: int
     max_iters: int
+    closed_form: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,7 +68,8 @@ def start_variables(normal: np.ndarray, point: np.ndarray) -> tuple:
     return (*tf.rotations_from_normal(torch.from_numpy(normal)), torch.from_numpy(point).clone())
 
 
-def _reflect(x_np: np.ndarray, var) -> np.ndarray:
+def reflect_points(x_np: np.ndarray, var) -> np.ndarray:
+    """``(N, D)`` points reflected by the variables ``var = (R_1, .., R_{D-1}, t)``."""
     *rots, t = var
     s = tf.reflection_from_rotations(rots).numpy()
     t = t.numpy()
@@ -75,7 +80,7 @@ def assign(problem: Alternation, var) -> tuple[np.ndarray, np.ndarray]:
     """Step 2: the mirror of every point under the reflection ``var`` (Sec. 7.2.3)."""
     return mirror_assignment(
         problem.points,
-        _reflect(problem.points, var),
+        reflect_points(problem.points, var),
         n_matches=problem.n_matches,
         method=problem.method,
         n_neighbors=problem.n_neighbors,
@@ -99,6 +104,8 @@ def fit_reflection(problem: Alternation, var, perm: np.ndarray):
     """Step 3: ``(R, t)`` for fixed correspondences by the Riemannian trust region (Sec. 7.2.2),
     warm-started from ``var``; returns the new variables and the cost."""
     matched = perm >= 0
+    if problem.closed_form:
+        return _fit_closed_form(problem, var, perm)
     weights = torch.from_numpy(matched.astype(np.float64))
     mirrors = problem.points_t[torch.from_numpy(np.where(matched, perm, 0))]
     st = tf.pair_statistics(problem.points_t, mirrors, weights)
@@ -112,6 +119,21 @@ def fit_reflection(problem: Alternation, var, perm: np.ndarray):
         max_iter=100,
     )
     return res.x, res.cost
+
+
+def _fit_closed_form(problem: Alternation, var, perm: np.ndarray):
+    """Step 3 in closed form: the least-squares reflection of the matched pairs (the global
+    minimum of Eq. 7.5 for fixed ``P``), its normal on the side of ``var``'s."""
+    matched = perm >= 0
+    x = problem.points_t[torch.from_numpy(matched)]
+    y = problem.points_t[torch.from_numpy(perm[matched])]
+    normal, offset = plane_from_pairs(x, y)
+    *rots, _ = var
+    if float(normal @ tf.normal_from_rotations(rots)) < 0:
+        normal, offset = -normal, -offset
+    new = start_variables(normal.numpy(), -float(offset) * normal.numpy())
+    cost = float(((reflect_points(x.numpy(), new) - y.numpy()) ** 2).sum())
+    return new, cost
 
 
 def alternate(problem: Alternation, var) -> AlternationRun:
@@ -142,6 +164,6 @@ def best_run(problem: Alternation, starts, best: AlternationRun | None = None) -
 
 
 def mirror_score(perm: np.ndarray, dist2: np.ndarray, h: float) -> float:
-    """Mean over all points of ``exp(-dist2 / (2 h^2))``, unmatched points counting 0; in [0, 1]."""
+    """The scan's trigger (not the result's score): mean over all points of ``exp(-dist2 / (2 h^2))``, unmatched points counting 0; in [0, 1]."""
     matched = perm >= 0
     return float(np.where(matched, np.exp(-0.5 * np.where(matched, dist2, 0.0) / h**2), 0.0).mean())

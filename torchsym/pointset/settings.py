@@ -8,7 +8,7 @@ from typing import Literal
 from torchsym.core.random import DEFAULT_SEED
 from torchsym.core.settings import Settings, group, setting
 
-__all__ = ["AssignmentSettings", "InitSettings", "PointSymmSettings", "ScanSettings"]
+__all__ = ["AssignmentSettings", "InitSettings", "PointSymmSettings", "ScanSettings", "SoftSettings"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,14 +45,28 @@ class AssignmentSettings(Settings):
 
 
 @dataclasses.dataclass(frozen=True)
+class SoftSettings(Settings):
+    """The plane refined by EM on soft, Sinkhorn-balanced correspondences after the hard fit."""
+
+    enabled: bool = setting(True, "refine the plane on soft correspondences (skipped for exact symmetries and match_fraction < 1)")
+    n_neighbors: int = setting(16, "candidate mirrors per point of the soft correspondences", low=1)
+    max_iters: int = setting(100, "EM iterations at most", low=1)
+    tol_angle: float = setting(1e-6, "stop when the normal moves less than this", unit="deg", low=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
 class PointSymmSettings(Settings):
     """Settings of :func:`~torchsym.pointset.point_symm` (thesis Ch. 7, Algorithm 7)."""
 
     max_iters: int = setting(50, "alternations of the correspondences and (R, t) ('till convergence')", low=1)
+    max_trust_region_dim: int = setting(
+        16, "largest D whose (R, t) step runs the trust region (Sec. 7.2.2); above it, the closed-form least-squares reflection", low=2
+    )
     match_fraction: float = setting(1.0, "largest fraction of points that get a mirror (Sec. 7.4.4)", low=0.0, high=1.0, low_open=True)
     init: InitSettings = group(InitSettings)
     scan: ScanSettings = group(ScanSettings)
     assignment: AssignmentSettings = group(AssignmentSettings)
+    soft: SoftSettings = group(SoftSettings)
     max_points: int = setting(10_000, "largest N accepted (subsample larger sets)", low=2)
     max_dim: int = setting(512, "largest D accepted (the result holds D-1 dense D x D rotations)", low=2)
     seed: int = setting(DEFAULT_SEED, "seed of the generator a module uses when called without one", low=0)

@@ -19,10 +19,14 @@ from torchsym.core.results import Result
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.pointset import transform as tf
-from torchsym.pointset.alternation import Alternation, AlternationRun, best_run, mirror_score
+from torchsym.pointset.alternation import (
+    Alternation, AlternationRun, assign, best_run, mirror_score, reflect_points, start_variables,
+)
 from torchsym.pointset.hull import hull_basis, lift_result
 from torchsym.pointset.initialization import choose_starts, initial_plane, normal_scan, pair_search, thesis_pair_search
+from torchsym.pointset.score import symmetry_score
 from torchsym.pointset.settings import PointSymmSettings
+from torchsym.pointset.soft_refinement import soft_refine_plane
 
 __all__ = ["PointSymm", "PointSymmResult", "point_symm"]
 
@@ -48,8 +52,12 @@ class PointSymmResult(Result):
             plane), -1 where unmatched.
         residuals: ``(N,)`` distance from each reflected point to its mirror (``inf`` where
             unmatched).
-        score: in [0, 1], the mean over all points of ``exp(-(residual / h)^2 / 2)``, ``h`` a
-            quarter of the median nearest-neighbour distance (unmatched points count 0).
+        score: in [0, 1], calibrated against chance (:func:`~torchsym.pointset.score.symmetry_score`):
+            ``q``, the mean over all points of ``max(0, 1 - residual / min(nn, moved))``
+            (``nn`` the distance to the point's nearest other point, ``moved`` how far the
+            reflection moves it, unmatched points 0), corrected by its mean ``q_0`` under
+            random planes: ``max(0, (q - q_0) / (1 - q_0))``; 1 for an exact symmetry, near 0
+            for random sets in any dimension.
         cost: the symmetry error of Eq. 7.5 over the matched points.
         iterations: alternations run from the winning start.
         converged: True when the correspondences stopped changing before ``max_iters``.
@@ -104,7 +112,7 @@ def _solve_in_hull(
 
 
 def _score_width(xn: np.ndarray, tree: cKDTree) -> float:
-    """``h`` of the score: a quarter of the median nearest-neighbour distance."""
+    """``h`` of the scan's trigger: a quarter of the median nearest-neighbour distance."""
     nn_dist, _ = tree.query(xn, k=2)
     spacing = np.median(nn_dist[:, 1])
     if spacing <= 0:
@@ -140,6 +148,7 @@ def _problem(xn: np.ndarray, tree: cKDTree, settings: PointSymmSettings) -> Alte
     return Alternation(
         points=xn, points_t=torch.from_numpy(xn), tree=tree, manifold=tf.rotation_manifold(d), method=method,
         n_matches=n_matches, n_neighbors=a.n_neighbors, max_iters=settings.max_iters,
+        closed_form=d > settings.max_trust_region_dim,
     )
 
 
@@ -159,7 +168,29 @@ def _rescan(problem: Alternation, best: AlternationRun, rng, settings: PointSymm
     return scanned
 
 
-def _result(best: AlternationRun, mu, radius, h: float, dtype: torch.dtype, device, method: str) -> PointSymmResult:
+def _soften(problem: Alternation, best: AlternationRun, settings: PointSymmSettings) -> AlternationRun:
+    """The winning plane refined on soft correspondences (:func:`soft_refine_plane`), and the
+    hard correspondences of the refined plane."""
+    soft = settings.soft
+    matched = best.perm >= 0
+    if not soft.enabled or problem.n_matches is not None or not matched.any():
+        return best
+    d = problem.points.shape[1]
+    s2 = float(best.dist2[matched].mean()) / d
+    *rots, t = best.var
+    normal = tf.normal_from_rotations(rots).numpy()
+    refined = soft_refine_plane(
+        problem.points, normal, -float(normal @ t.numpy()), s2, tree=problem.tree,
+        n_neighbors=soft.n_neighbors, max_iters=soft.max_iters, tol_angle=soft.tol_angle,
+    )
+    if refined.iterations == 0:
+        return best
+    var = start_variables(refined.normal, -refined.offset * refined.normal)
+    perm, dist2 = assign(problem, var)
+    return AlternationRun(float(dist2[perm >= 0].sum()), var, perm, dist2, best.iterations, best.converged)
+
+
+def _result(problem: Alternation, best: AlternationRun, mu, radius, rng, dtype: torch.dtype, device) -> PointSymmResult:
     """Step 4's output: the plane read off the rotations (Theorem 7.2.3), in input coordinates."""
     *rots, t_n = best.var
     normal = tf.normal_from_rotations(rots).numpy()
@@ -182,11 +213,11 @@ def _result(best: AlternationRun, mu, radius, h: float, dtype: torch.dtype, devi
         translation=out(translation),
         permutation=torch.as_tensor(perm, dtype=torch.int64, device=device),
         residuals=out(residuals),
-        score=mirror_score(perm, dist2, h),
+        score=symmetry_score(problem.points, reflect_points(problem.points, best.var), perm, rng, tree=problem.tree),
         cost=float(dist2[matched].sum()) * radius * radius,
         iterations=best.iterations,
         converged=best.converged,
-        assignment=method,
+        assignment=problem.method,
     )
 
 
@@ -207,7 +238,8 @@ def point_symm(
        (Sec. 7.2.2);
     4. steps 2-3 until ``P`` stops changing; the plane by Theorem 7.2.3.
     Extensions (``docs/design/pointsymm.md``): several starts, a scan of planes through the
-    centroid when the best plane scores below 0.5, and flat sets solved in their affine hull.
+    centroid when the best plane scores below 0.5, the plane refined on soft correspondences
+    (EM, ``soft``), and flat sets solved in their affine hull.
 
     Args:
         points: ``(N, D)`` points, ``2 <= D <= max_dim``, ``2 <= N <= max_points``.
@@ -256,7 +288,8 @@ def point_symm(
     best = best_run(problem, starts)  # steps 2-4 from each start
     if initial is None and settings.scan.enabled:
         best = _rescan(problem, best, rng, settings, h)
-    return _result(best, mu, radius, h, pts.dtype, pts.device, problem.method)
+    best = _soften(problem, best, settings)
+    return _result(problem, best, mu, radius, rng, pts.dtype, pts.device)
 
 
 @register_solver("pointsymm", kind="points", default=True)

@@ -1,0 +1,130 @@
+"""Soft-correspondence refinement of a reflection plane (an extension of thesis Ch. 7).
+
+Algorithm 7 fits the plane to hard correspondences: each point gets exactly one mirror. When
+the noise is comparable to the spacing of the points, a point's true mirror is one of several
+points about equally close to its reflection, and the hard assignment picks the wrong one
+often enough to bias the plane. This stage replaces the hard ``P`` by a soft one and fits the
+plane by expectation-maximisation, which approaches the posterior mean over correspondences
+that the hard fit only approximates by its mode (``docs/design/pointsymm.md``):
+
+- E-step: for the pairs ``(i, j)``, ``j`` among the ``n_neighbors`` nearest points to the
+  reflection of ``x_i`` (``j != i``), the kernel ``exp(-|S x_i - x_j|^2 / (2 s^2))``, which
+  is symmetric in ``i, j`` because ``S`` is an isometric involution; balanced by symmetric
+  Sinkhorn scaling into a doubly stochastic matrix (a soft perfect matching: every point is
+  one mirror's worth of partner, as in the hard assignment);
+- M-step: the least-squares reflection for the weighted pairs, in closed form
+  (:func:`~torchsym.geometry.plane_from_pairs`), and the residual variance ``s^2`` (per
+  coordinate) re-estimated from the weighted residuals.
+
+``s^2`` starts at the hard fit's residual variance; an exact symmetry (zero residuals) is
+left as it is.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+from scipy.spatial import cKDTree
+
+from torchsym.geometry import plane_from_pairs
+
+__all__ = ["SoftPlane", "soft_refine_plane"]
+
+# Residual variance, relative to the mean squared radius, below which the hard fit is an exact
+# symmetry up to rounding and is returned as it is.
+_EXACT_S2 = 1e-20
+
+# Symmetric Sinkhorn sweeps per E-step.
+_SINKHORN_SWEEPS = 50
+
+
+@dataclasses.dataclass(frozen=True)
+class SoftPlane:
+    """The refined plane ``normal . x + offset = 0`` (``normal (D,)``), the residual variance
+    per coordinate ``s2`` and the EM iterations run."""
+
+    normal: np.ndarray
+    offset: float
+    s2: float
+    iterations: int
+    converged: bool
+
+
+def _reflect(x: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+    return x - 2.0 * (x @ normal + offset)[:, None] * normal
+
+
+def _pairs(x: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, k: int):
+    """Unordered candidate pairs ``(a, c)`` (``a < c``) and their squared residuals."""
+    n = x.shape[0]
+    dist, idx = tree.query(_reflect(x, normal, offset), k=min(k + 1, n))  # (N, k+1)
+    dist, idx = dist.reshape(n, -1), idx.reshape(n, -1)
+    rows = np.repeat(np.arange(n), idx.shape[1])
+    cols, d2 = idx.ravel(), dist.ravel() ** 2
+    other = (rows != cols) & (cols < n)
+    rows, cols, d2 = rows[other], cols[other], d2[other]
+    a, c = np.minimum(rows, cols), np.maximum(rows, cols)
+    _, first = np.unique(a * n + c, return_index=True)  # |S x_a - x_c| = |S x_c - x_a|
+    return a[first], c[first], d2[first]
+
+
+def _balance(a: np.ndarray, c: np.ndarray, kernel: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Symmetric Sinkhorn scaling ``u`` making ``P_ac = K_ac u_a u_c`` doubly stochastic."""
+    n = u.shape[0]
+    for _ in range(_SINKHORN_SWEEPS):
+        wu = np.bincount(a, kernel * u[c], n) + np.bincount(c, kernel * u[a], n)  # (N,)
+        u = np.sqrt(u / np.maximum(wu, 1e-300))
+    return u
+
+
+def soft_refine_plane(
+    points: np.ndarray, normal: np.ndarray, offset: float, s2: float, *,
+    tree: cKDTree | None = None, n_neighbors: int = 16, max_iters: int = 100, tol_angle: float = 1e-6,
+) -> SoftPlane:
+    """EM on soft, Sinkhorn-balanced correspondences from the plane ``(normal, offset)``.
+
+    Args:
+        points: ``(N, D)`` points (PointSymm passes them centred, unit RMS radius).
+        normal: ``(D,)`` unit normal of the starting plane; ``offset`` its offset.
+        s2: starting residual variance per coordinate (the hard fit's); at rounding level
+            (``<= 1e-20`` times the mean squared norm of the points) the start is returned
+            unchanged (an exact symmetry).
+        tree: a :class:`cKDTree` of ``points`` to reuse.
+        n_neighbors: candidate mirrors per point.
+        max_iters: most EM iterations.
+        tol_angle: stop when the normal moves less than this, in degrees.
+
+    Returns:
+        :class:`SoftPlane`, its normal on the side of the starting one.
+    """
+    x = np.asarray(points, dtype=np.float64)
+    n_pts, dim = x.shape
+    normal, offset = np.asarray(normal, dtype=np.float64), float(offset)
+    if not s2 > _EXACT_S2 * float((x**2).sum(1).mean()) or n_pts < 3:
+        return SoftPlane(normal, offset, max(float(s2), 0.0), 0, True)
+    tree = cKDTree(x) if tree is None else tree
+    tol = 2.0 * np.sin(np.radians(tol_angle) / 2.0)
+    converged, it = False, 0
+    for it in range(1, max_iters + 1):
+        a, c, d2 = _pairs(x, tree, normal, offset, n_neighbors)  # E-step
+        if it == 1:  # anneal: start as wide as the candidates' residuals
+            s2 = max(s2, float(np.median(d2)) / dim)
+        kernel = np.exp(-(d2 - d2.min()) / (2.0 * s2))
+        u = _balance(a, c, kernel, np.ones(n_pts))
+        weight = kernel * u[a] * u[c]  # (P,) soft matching of the unordered pairs
+        new_normal, new_offset = plane_from_pairs(  # M-step
+            torch.from_numpy(x[a]), torch.from_numpy(x[c]), torch.from_numpy(weight)
+        )
+        new_normal, new_offset = new_normal.numpy(), float(new_offset)
+        if new_normal @ normal < 0:
+            new_normal, new_offset = -new_normal, -new_offset
+        r2 = ((_reflect(x[a], new_normal, new_offset) - x[c]) ** 2).sum(1)
+        s2 = max(float((weight * r2).sum() / (weight.sum() * dim)), 1e-300)
+        moved = float(np.linalg.norm(new_normal - normal)) + abs(new_offset - offset)
+        normal, offset = new_normal, new_offset
+        if moved <= tol:
+            converged = True
+            break
+    return SoftPlane(normal, offset, s2, it, converged)
