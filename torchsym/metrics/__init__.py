@@ -9,4 +9,5 @@ from torchsym.metrics.mesh import *  # noqa: F401,F403
 from torchsym.metrics.axes import *  # noqa: F401,F403
 from torchsym.metrics.multiview import *  # noqa: F401,F403
 from torchsym.metrics.superpixels import *  # noqa: F401,F403
+from torchsym.metrics.masks import *  # noqa: F401,F403
 from torchsym.metrics.symmetry_map import *  # noqa: F401,F403

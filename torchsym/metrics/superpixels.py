@@ -8,13 +8,14 @@ Label maps are ``(H, W)`` integer arrays or tensors; ground truth segmentations 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import torch
 from scipy import ndimage
 
-from torchsym.errors import InputShapeError
+from torchsym.errors import InputShapeError, InputValueError
 
 __all__ = [
     "achievable_segmentation_accuracy",
@@ -160,13 +161,33 @@ def mirror_consistency(labels: Any, normal: Any, offset: float, *, region: Any |
     return float((iou * size_src).sum() / size_src.sum())
 
 
-def segmentation_error(mask: Any, truth: Any) -> dict[str, float]:
+def segmentation_error(mask: Any, truth: Any, *, box: Sequence[int] | None = None, ignore: Any | None = None) -> dict[str, float]:
     """Misclassified pixels of a binary ``mask`` against ``truth`` (both ``(H, W)``):
     ``over_image``, over all pixels (the thesis's normalisation, Sec. 4.3.1), and
-    ``over_box``, over the pixels of the truth's bounding box (GrabCut in One Cut's)."""
+    ``over_box``, over the pixels of ``box`` (GrabCut in One Cut's).
+
+    Args:
+        mask, truth: ``(H, W)`` binary (non-zero is the object).
+        box: ``(x0, y0, x1, y1)`` pixel box, ``x0 <= x < x1``, ``y0 <= y < y1`` (the box a
+            method was given); default: the truth's bounding box.
+        ignore: optional ``(H, W)`` binary; these pixels (e.g. GrabCut's unlabelled band
+            along the outline) count neither as errors nor in either denominator.
+    """
     m, g = _labels(mask, "mask").astype(bool), _labels(truth, "truth").astype(bool)
     _same_shape(m, g)
-    wrong = m != g
-    ys, xs = np.nonzero(g)
-    box = wrong.size if len(ys) == 0 else (ys.max() - ys.min() + 1) * (xs.max() - xs.min() + 1)
-    return {"over_image": float(wrong.sum() / wrong.size), "over_box": float(wrong.sum() / box)}
+    counted = np.ones(m.shape, bool)
+    if ignore is not None:
+        ign = _labels(ignore, "ignore").astype(bool)
+        if ign.shape != m.shape:
+            raise InputShapeError(f"ignore: expected {m.shape} like mask, got {ign.shape}")
+        counted = ~ign
+    wrong = (m != g) & counted
+    if box is None:
+        ys, xs = np.nonzero(g)
+        box = (0, 0, m.shape[1], m.shape[0]) if len(ys) == 0 else (xs.min(), ys.min(), xs.max() + 1, ys.max() + 1)
+    if len(box) != 4 or not box[0] < box[2] or not box[1] < box[3]:
+        raise InputValueError(f"box: expected (x0, y0, x1, y1) with x0 < x1 and y0 < y1, got {tuple(box)}")
+    x0, y0, x1, y1 = (int(v) for v in box)
+    n_box = int(counted[max(y0, 0) : y1, max(x0, 0) : x1].sum())
+    n_all = int(counted.sum())
+    return {"over_image": float(wrong.sum() / max(n_all, 1)), "over_box": float(wrong.sum() / max(n_box, 1))}
