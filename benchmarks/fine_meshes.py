@@ -33,7 +33,7 @@ from torchsym.geometry.mesh import Mesh
 from torchsym.io import read_mesh
 from torchsym.metrics.mesh import extremity_vertices
 
-SETS = ("FAUST", "TOSCA_Isometric")
+SETS = ("FAUST", "TOSCA_Isometric", "TOSCA_nonIsometric")
 
 
 def refine_irregular(v: np.ndarray, f: np.ndarray, n_target: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
