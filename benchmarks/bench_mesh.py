@@ -14,17 +14,25 @@ by pyFM itself. Data sets:
   ``llorz/SGA18_orientation_BCICP_dataset`` with their symmetric landmark ground truth
   (``corres/NAME.vts`` and ``corres/NAME.sym.vts``), read from ``--faust-tosca DIR`` (the
   folder holding ``FAUST/`` and ``TOSCA_Isometric/``, or its parent); not committed;
-- ``FAUST+holes`` / ``TOSCA+holes``: every 4th shape with 10 % of its area removed.
+- ``FAUST+holes`` / ``TOSCA+holes``: every 4th shape with 10 % of its area removed;
+- ``TOSCA-nonIso``: BCICP's TOSCA_nonIsometric shapes, never used to choose settings (held out);
+- ``... full``: each of those shapes refined on its own surface to 20,000-50,000 irregular
+  vertices, the ground truth carried exactly (``fine_meshes.py``, cached under ``--fine``).
 
 Metrics (Sec. 6.3.2): correspondence rate (geodesic error below ``sqrt(area / 20 pi)``,
 on the surface: edge paths straightened by FlipOut, :func:`torchsym.metrics.correspondence_rate`;
 the rate along mesh edges alone, stricter, beside it), mesh rate (share of meshes above
-75 %), median seconds per mesh with
+75 %), the extremity rate (the correspondence rate on the ground-truth vertices in the top 5 %
+by mean geodesic distance, :func:`torchsym.metrics.extremity_vertices`, chosen on the
+remeshed shape and carried to the full-resolution one), median seconds per mesh with
 the eigendecomposition alone beside it. A timing row runs the mirror-completed
 ``mannequin-devil`` (about 12,900 vertices) five times, exactly symmetric and twisted as in
 the synthetic set (``--timing-only`` reruns just these rows).
 
-    python benchmarks/bench_mesh.py [--faust-tosca DIR] [--step N] [--no-pyfm] [--timing-only]
+    python benchmarks/bench_mesh.py [--faust-tosca DIR] [--step N] [--sets A,B] [--no-ablations] [--no-pyfm]
+                                    [--tag TEXT] [--timing-only | --fine-timing-only]
+
+Run from the repository root with ``PYTHONPATH=.`` so that this checkout's ``torchsym`` is imported.
 """
 
 from __future__ import annotations

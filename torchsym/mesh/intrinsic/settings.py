@@ -131,7 +131,7 @@ class Coarse(Settings):
 
     enabled: bool = setting(True, "solve meshes with more than max_vertices vertices on a decimated copy")
     max_vertices: int = setting(8000, "meshes with more vertices are solved on the copy", low=4)
-    n_vertices: int = setting(5000, "vertices of the copy (within 20 %)", low=4)
+    n_vertices: int = setting(5000, "most vertices of the copy (evenly spread input vertices)", low=4)
 
     def check(self) -> None:
         if self.n_vertices > self.max_vertices:
