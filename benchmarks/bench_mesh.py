@@ -602,8 +602,11 @@ def main(argv: list[str] | None = None) -> None:
             use_pyfm = False
 
     sets = build_sets(args)
-    results = {name + args.tag: evaluate(items, use_pyfm, ablations=not args.no_ablations and "full" not in name)
-               for name, items in sets.items()}
+    args.out.mkdir(parents=True, exist_ok=True)
+    results = {}
+    for name, items in sets.items():  # saved after each set, so that a stopped run keeps what it finished
+        results[name + args.tag] = evaluate(items, use_pyfm, ablations=not args.no_ablations and "full" not in name)
+        saved_path.write_text(json.dumps({**saved, "results": {**saved["results"], **results}}, indent=2))
     if not args.sets:
         saved["timing"] = timing_row(args.meshes) if args.meshes.is_dir() else {}
         if args.faust_tosca is not None:
