@@ -417,12 +417,13 @@ def render_dev(results: dict, fine_timing: dict) -> list[str]:
         (
             "Extremity rate: the correspondence rate on the ground-truth vertices in the top 5 % by mean "
             "geodesic distance to the rest of the shape (`torchsym.metrics.extremity_vertices`, 128 "
-            "area-weighted sources; limb, head and tail ends; for FAUST/TOSCA chosen on the remeshed shape and "
+            "farthest-point sources weighted by their Voronoi cells' areas; limb, head and tail ends; for FAUST/TOSCA chosen on the remeshed shape and "
             "carried to the full-resolution one). Full resolution: each remeshed BCICP shape refined on its own "
             "surface to 20,000-50,000 irregular vertices (`benchmarks/fine_meshes.py`: midpoint subdivision at "
             "random edge points, random faces split at random interior points, vertices shuffled), ground truth "
             "carried exactly. Mesh rate on the all-vertex rate (> 75 %). Times: seconds per mesh on 2 cores "
-            "shared with 4 other jobs (load 5-10): noisy, and slower than on an idle machine."
+            "shared with many other jobs (load 10-18): wall-clock times are noisy and several times an idle machine's; "
+            "the full-resolution timing also gives processor time."
         ),
         "",
         "| data set | meshes | median vertices | torchsym rate % | extremity rate % | mesh rate % "
