@@ -9,7 +9,7 @@ import torch
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.mesh import Mesh
 from torchsym.mesh.synthetic import icosphere
-from torchsym.metrics.mesh import correspondence_rate, mesh_rate, symmetry_threshold
+from torchsym.metrics.mesh import correspondence_rate, extremity_vertices, mesh_rate, symmetry_threshold
 
 
 @pytest.fixture(scope="module")
@@ -87,3 +87,41 @@ class TestCorrespondenceRate:
 def test_mesh_rate():
     assert mesh_rate([0.9, 0.8, 0.5, 0.75]) == 0.5
     assert math.isnan(mesh_rate([]))
+
+
+@pytest.fixture(scope="module")
+def dumbbell():
+    # an ellipsoid stretched along x: its extremities are the two ends of the long axis
+    s = icosphere(3)
+    v = s.vertices.numpy() * np.array([3.0, 1.0, 1.0])
+    return Mesh(torch.from_numpy(v), s.faces)
+
+
+class TestExtremityVertices:
+    def test_smoke(self, dumbbell):
+        ext = extremity_vertices(dumbbell, share=0.05)
+        assert ext.dtype == torch.int64 and ext.shape == (round(0.05 * dumbbell.num_vertices),)
+        x = dumbbell.vertices.numpy()[ext.numpy(), 0]
+        assert (np.abs(x) > 2.5).all()  # at the ends of the long axis
+        assert (x > 0).any() and (x < 0).any()
+
+    def test_candidates(self, dumbbell):
+        cand = np.flatnonzero(dumbbell.vertices.numpy()[:, 0] > 0)
+        ext = extremity_vertices(dumbbell, share=0.1, candidates=cand).numpy()
+        assert np.isin(ext, cand).all() and ext.size == round(0.1 * cand.size)
+        mask = torch.zeros(dumbbell.num_vertices, dtype=torch.bool)
+        mask[cand] = True
+        assert (extremity_vertices(dumbbell, share=0.1, candidates=mask).numpy() == ext).all()
+
+    def test_deterministic(self, dumbbell):
+        a = extremity_vertices(dumbbell, generator=torch.Generator().manual_seed(3))
+        b = extremity_vertices(dumbbell, generator=torch.Generator().manual_seed(3))
+        assert torch.equal(a, b)
+
+    def test_exception(self, dumbbell):
+        with pytest.raises(InputValueError, match="share"):
+            extremity_vertices(dumbbell, share=0.0)
+        with pytest.raises(InputValueError, match="n_sources"):
+            extremity_vertices(dumbbell, n_sources=0)
+        with pytest.raises(InputShapeError, match="candidates"):
+            extremity_vertices(dumbbell, candidates=[dumbbell.num_vertices])

@@ -22,13 +22,14 @@ from typing import Any
 import numpy as np
 import torch
 
+from torchsym.core.random import make_generator
 from torchsym.core.results import Result
 from torchsym.errors import InputShapeError, InputValueError
 from torchsym.mesh.geodesic import geodesic_distances, surface_geodesic_lengths
 from torchsym.geometry.mesh import Mesh
-from torchsym.mesh.operators import edge_graph, face_areas
+from torchsym.mesh.operators import edge_graph, face_areas, mass_matrix
 
-__all__ = ["CorrespondenceScore", "correspondence_rate", "mesh_rate", "symmetry_threshold"]
+__all__ = ["CorrespondenceScore", "correspondence_rate", "extremity_vertices", "mesh_rate", "symmetry_threshold"]
 
 
 def _np(x: Any, dtype: Any) -> np.ndarray:
@@ -153,3 +154,77 @@ def mesh_rate(rates: Sequence[float], *, minimum: float = 0.75) -> float:
     if r.size == 0:
         return float("nan")
     return float((r > minimum).mean())
+
+
+def extremity_vertices(
+    mesh: Mesh,
+    *,
+    share: float = 0.05,
+    candidates: Any | None = None,
+    n_sources: int = 128,
+    generator: torch.Generator | None = None,
+) -> torch.Tensor:
+    """The vertices farthest, on average, from the rest of the surface: limb, head and tail ends.
+
+    Each vertex's mean geodesic distance (edge paths) to the surface is estimated from
+    ``n_sources`` farthest-point source vertices, each weighted by the area of its geodesic
+    Voronoi cell; the top ``share`` of ``candidates`` by that distance is returned. Scoring a
+    symmetric map on these vertices (``correspondence_rate(..., landmarks=...)``) judges
+    it where intrinsic symmetry maps go wrong (hands, feet, ears, tails) rather than on
+    the torso, which any orientation-reversing map gets right.
+
+    Args:
+        mesh: the mesh (one connected component is expected; unreachable vertices count as far).
+        share: fraction of the candidates returned, in (0, 1]; default 5 %.
+        candidates: ``(C,)`` vertex indices to choose among (e.g. those with a ground
+            truth), or a ``(V,)`` bool mask; None: every vertex.
+        n_sources: geodesic sources of the estimate.
+        generator: draws the first source; None seeds one with 0.
+
+    Returns:
+        ``(M,)`` int64 vertex indices, ``M = max(1, round(share * C))``, farthest first.
+
+    Raises:
+        InputValueError: ``share`` outside (0, 1] or ``n_sources < 1``.
+        InputShapeError: ``candidates`` out of range.
+    """
+    if not 0.0 < share <= 1.0:
+        raise InputValueError(f"share: expected a fraction in (0, 1], got {share}")
+    if n_sources < 1:
+        raise InputValueError(f"n_sources: expected at least 1, got {n_sources}")
+    v = _np(mesh.vertices, np.float64)
+    f = _np(mesh.faces, np.int64)
+    n = v.shape[0]
+    if candidates is None:
+        cand = np.arange(n)
+    else:
+        cand = candidates.detach().cpu().numpy() if isinstance(candidates, torch.Tensor) else np.asarray(candidates)
+        cand = cand.ravel() if cand.dtype == bool else cand.ravel().astype(np.int64)
+        if cand.dtype == bool:
+            if cand.shape[0] != n:
+                raise InputShapeError(f"candidates: expected a ({n},) mask, got {cand.shape}")
+            cand = np.flatnonzero(cand)
+        elif cand.size and (cand.min() < 0 or cand.max() >= n):
+            raise InputShapeError(f"candidates: expected vertex indices in [0, {n - 1}]")
+    gen = generator if generator is not None else make_generator(0)
+    area = mass_matrix(v, f).diagonal()  # (V,)
+    graph = edge_graph(v, f)
+    source = int(torch.randint(n, (1,), generator=gen))
+    rows = []
+    nearest = np.full(n, np.inf)
+    for _ in range(min(n_sources, n)):  # farthest-point sources, spread evenly over the surface
+        row = geodesic_distances(graph, np.array([source]))[0]  # (V,)
+        row[~np.isfinite(row)] = np.inf
+        rows.append(row)
+        nearest = np.minimum(nearest, row)
+        finite = np.where(np.isfinite(nearest), nearest, -1.0)
+        source = int(np.argmax(finite))
+        if finite[source] <= 0.0:
+            break
+    dist = np.stack(rows)  # (S, V)
+    dist[~np.isfinite(dist)] = 2.0 * dist[np.isfinite(dist)].max()
+    cell = np.bincount(np.argmin(dist, axis=0), weights=area, minlength=dist.shape[0])  # (S,) Voronoi cell areas
+    mean = (cell @ dist / cell.sum())[cand]  # (C,) area-weighted mean distance
+    m = max(1, int(round(share * cand.size)))
+    order = np.argsort(-mean, kind="stable")[:m]
+    return torch.from_numpy(cand[order].astype(np.int64))

@@ -70,6 +70,10 @@ class IntrinsicSymmetryResult(Result):
         hypothesis: ``"pairs"``, ``"hks_pairs"``, ``"orientation"`` or ``"extrinsic"``.
         holes_closed: holes covered by new triangles before the spectrum.
         notes: what the solver did that a caller should know.
+
+    A mesh over ``coarse.max_vertices`` vertices is solved on a coarse copy: ``map``,
+    ``map_before_refine``, ``pairs`` and ``feature_points`` are then carried to the input's
+    vertices, while the functional maps, ``rotation`` and ``eigenvalues`` are the copy's.
     """
 
     map: torch.Tensor

@@ -6,8 +6,10 @@ import dataclasses
 from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
+from torchsym.errors import ConfigError
 
 __all__ = [
+    "Coarse",
     "Correction",
     "Extrinsic",
     "Features",
@@ -124,19 +126,36 @@ class Realign(Settings):
 
 
 @dataclasses.dataclass(frozen=True)
+class Coarse(Settings):
+    """Solving a large mesh on a decimated copy and carrying the map to every vertex (an extension)."""
+
+    enabled: bool = setting(True, "solve meshes with more than max_vertices vertices on a decimated copy")
+    max_vertices: int = setting(8000, "meshes with more vertices are solved on the copy", low=4)
+    n_vertices: int = setting(5000, "most vertices of the copy (evenly spread input vertices)", low=4)
+
+    def check(self) -> None:
+        if self.n_vertices > self.max_vertices:
+            raise ConfigError(
+                f"coarse.n_vertices: expected at most coarse.max_vertices ({self.max_vertices}), got {self.n_vertices}"
+            )
+
+
+@dataclasses.dataclass(frozen=True)
 class IntrinsicSymmetrySettings(Settings):
     """Settings of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry` (thesis Ch. 6).
 
     Thesis values where it gives one (``k = 13``, ``h = 50``, ``d <= 25``, a large ``q``),
     else chosen on a development split of FAUST/TOSCA. The thesis's method alone:
     ``signs.n_uncertain = 0``, ``hypotheses.hks_pairs = hypotheses.orientation = False``,
-    ``extrinsic.enabled = refine.enabled = polish.enabled = realign.enabled = False``.
+    ``extrinsic.enabled = refine.enabled = polish.enabled = realign.enabled = False``
+    (and ``coarse.enabled = False`` to solve every vertex).
     """
 
     seed: int = setting(0, "seed of the generator of the Module form", low=0)
     n_eigen: int = setting(13, "k, eigenfunctions of the thesis's map (thesis: 13)", low=3)
     components: Literal["largest", "refuse"] = setting("largest", "keep the largest connected component, or refuse several")
     fill_holes: bool = setting(True, "cover holes with new triangles before the spectrum")
+    coarse: Coarse = group(Coarse)
     features: Features = group(Features)
     pairs: Pairs = group(Pairs)
     signs: Signs = group(Signs)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Mapping
@@ -18,6 +19,7 @@ from torchsym.core.registry import register_solver
 from torchsym.core.results import on_input_device
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.geometry.mesh import Mesh
+from torchsym.mesh.intrinsic.coarsen import carry_map, coarse_copy
 from torchsym.mesh.intrinsic.hypotheses import (
     HYPOTHESIS_TEXT,
     Candidate,
@@ -38,6 +40,7 @@ from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
 from torchsym.mesh.intrinsic.workspace import Plan, Surface, Workspace, plan_bases, prepare_surface, sample_notes
 from torchsym.mesh.nearest import SampledSearch
+from torchsym.mesh.validate import validate_mesh
 
 __all__ = ["IntrinsicSymmetry", "intrinsic_symmetry"]
 
@@ -91,6 +94,8 @@ def intrinsic_symmetry(
     """
     settings = resolve_settings(IntrinsicSymmetrySettings, settings, overrides)
     gen = generator if generator is not None else make_generator(settings.seed)
+    if settings.coarse.enabled and isinstance(mesh, Mesh) and mesh.num_vertices > settings.coarse.max_vertices:
+        return _solve_on_copy(mesh, settings, gen)  # steps 1-14 on a decimated copy
     timings: dict[str, float] = {}
     notes: list[str] = []
     t_start = tic = time.perf_counter()
@@ -146,6 +151,48 @@ def intrinsic_symmetry(
     finish_map(ws, state, timings)
     timings["total"] = time.perf_counter() - t_start
     return _result(surface, spectrum, features.points, chosen, state, timings, notes)
+
+
+def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> IntrinsicSymmetryResult:
+    """Steps 1-14 on a copy of ``mesh`` decimated to about ``coarse.n_vertices`` vertices, the map carried to every vertex."""
+    t_start = time.perf_counter()
+    checked = validate_mesh(mesh, components=settings.components, min_vertices=settings.n_eigen + 1)
+    v = checked.mesh.vertices.detach().cpu().double().numpy()  # (V', 3)
+    copy = coarse_copy(v, checked.mesh.faces.detach().cpu().numpy(), settings.coarse.n_vertices, np.random.default_rng(draw_seed(gen)))
+    inner = intrinsic_symmetry(
+        Mesh(torch.from_numpy(copy.vertices), torch.from_numpy(copy.faces)),
+        dataclasses.replace(settings, coarse=dataclasses.replace(settings.coarse, enabled=False)),
+        generator=gen,
+    )
+    tic = time.perf_counter()
+    vmap = checked.map_to_input(torch.from_numpy(carry_map(copy, v, inner.map.numpy())))
+    to_input = torch.from_numpy(checked.vertex_index.numpy()[copy.to_input])  # copy vertex -> input vertex
+    t_carry = time.perf_counter() - tic
+    notes = [
+        f"solved on a copy decimated to {copy.vertices.shape[0]} vertices (coarse.max_vertices "
+        f"{settings.coarse.max_vertices}), the map carried to every vertex",
+        *(f"copy: {n}" if n.startswith("kept the largest") else n for n in inner.notes),
+    ]
+    if checked.dropped_vertices:
+        notes.insert(1, f"kept the largest of {checked.num_components} connected components; "
+                        f"{checked.dropped_vertices} vertices dropped (map = -1 there)")
+    timings = {**inner.timings, "coarsen": copy.seconds, "carry": t_carry}
+    timings["total"] = time.perf_counter() - t_start
+    return dataclasses.replace(
+        inner,
+        map=vmap,
+        map_before_refine=Deferred(partial(_carried_before, checked, copy, v, inner)),
+        pairs=to_input[inner.pairs],
+        feature_points=to_input[inner.feature_points],
+        timings=timings,
+        num_components=checked.num_components,
+        dropped_vertices=checked.dropped_vertices,
+        notes=tuple(notes),
+    )
+
+
+def _carried_before(checked, copy, v: np.ndarray, inner: IntrinsicSymmetryResult) -> torch.Tensor:
+    return checked.map_to_input(torch.from_numpy(carry_map(copy, v, inner.map_before_refine.numpy())))
 
 
 def _draw_seeds(surface: Surface, spectrum: Spectrum, pair_sets: list, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> tuple:
