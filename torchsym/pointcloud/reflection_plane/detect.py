@@ -102,7 +102,7 @@ def detect_reflection_plane(
         kpts, kindex = subs.dense if subs.dense is not None else dense_part(subs.sub, subs.index, settings.dense)
         normal, offset, refined = refine_by_kernel(
             kpts, kindex, normal, offset, [*axes, *search.ranked(settings.kernel.n_starts)], settings.kernel,
-            n_directions=settings.init.n_directions, min_separation=settings.starts.min_separation,
+            n_directions=settings.init.n_directions, min_separation=settings.starts.min_separation, tol_se=settings.tol_se,
         )
         if refined:
             dist, nn_idx = full_index.query(reflect_points(xs, normal, offset))
