@@ -140,6 +140,9 @@ class ReflectionPlaneSettings(Settings):
         "this many standard errors of their fit (0: their absolute tolerances alone)",
         unit="x standard error", low=0.0,
     )
+    n_chance_planes: int = setting(
+        32, "random planes whose highest mirror share is the score's chance level (0: the raw share)", low=0
+    )
     init: InitSettings = group(InitSettings)
     starts: StartsSettings = group(StartsSettings)
     refine: RefineSettings = group(RefineSettings)
