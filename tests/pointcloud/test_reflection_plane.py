@@ -301,10 +301,12 @@ class TestScoreCalibration:
         which = torch.multinomial(torch.rand(5, generator=g) + 0.2, n, replacement=True, generator=g)
         return means[which] + (factors[which] @ torch.randn(n, 3, 1, generator=g))[..., 0]
 
+    @pytest.mark.slow
     def test_gaussian_mixtures_score_low(self):
         for seed in range(4):
             assert detect_reflection_plane(self._mixture(2000, seed)).score < 0.3
 
+    @pytest.mark.slow
     def test_mirror_completed_clouds_score_high(self):
         for seed in range(3):
             assert detect_reflection_plane(planted_symmetric_cloud(2000, generator=seed).points).score > 0.7

@@ -36,8 +36,8 @@ def chance_corrected_score(
     tol: float,
     generator: torch.Generator,
     *,
-    n_planes: int = 16,
-    n_probe: int = 500,
+    n_planes: int = 64,
+    n_probe: int = 300,
 ) -> float:
     """``(s - s0) / (1 - s0)`` clamped to [0, 1]: ``s`` the :func:`mirror_share` of the
     plane, ``s0`` the highest share among ``n_planes`` random planes (normals on a randomly

@@ -141,7 +141,7 @@ class ReflectionPlaneSettings(Settings):
         unit="x standard error", low=0.0,
     )
     n_chance_planes: int = setting(
-        32, "random planes whose highest mirror share is the score's chance level (0: the raw share)", low=0
+        64, "random planes whose highest mirror share is the score's chance level (0: the raw share)", low=0
     )
     init: InitSettings = group(InitSettings)
     starts: StartsSettings = group(StartsSettings)
