@@ -15,6 +15,7 @@ import torch
 from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, reflect_points, spread_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.geometry.sampling import sphere_normals
+from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
 from torchsym.pointcloud.reflection_plane.prealign import local_pca
 
 __all__ = ["kernel_refine", "kernel_score", "needs_kernel", "refine_by_kernel", "surface_variation"]
@@ -61,6 +62,7 @@ def kernel_refine(
     """
     k = min(k, index.points.shape[0])
     steps = 0
+    prev_step = None
     for _ in range(max_iters):
         d, j = index.query(reflect_points(points, normal, offset), k=k)  # (N, k)
         w = torch.exp(-0.5 * (d / width) ** 2).reshape(-1)  # (N k,)
@@ -73,9 +75,11 @@ def kernel_refine(
         if float(new_n @ normal) < 0:
             new_n, new_b = -new_n, -new_b
         moved = math.degrees(float(plane_angle(new_n, normal)))
-        normal, offset = new_n, new_b
+        step = new_n - normal
+        ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
+        normal, offset, prev_step = new_n, new_b, step
         tol = max(tol_angle, tol_se * math.degrees(float(pair_fit_errors(src, dst, w)[0]))) if tol_se > 0 else tol_angle
-        if moved < tol:
+        if moved * ahead < tol:
             break
     return normal, offset, steps
 

@@ -12,6 +12,7 @@ import torch
 
 from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
+from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
 
 __all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
 
@@ -64,19 +65,24 @@ def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, to
     """Point-to-plane Gauss-Newton from one start: mirror images of ``queries (Q, 3)``
     matched in ``targets (M, 3)`` (normals ``nu (M, 3)``, ``index`` over ``targets``),
     until the normal moves less than ``tol_angle`` degrees or ``tol_se`` standard errors of
-    the step's fit, whichever is larger, or after ``max_iters`` steps.
+    the step's fit, whichever is larger (the step counted with what is left to go,
+    :func:`~torchsym.pointcloud.reflection_plane.alternation.remaining_factor`), or after
+    ``max_iters`` steps.
 
     Returns ``(normal, offset, steps)``.
     """
     it = 0
+    prev_step = None
     for it in range(1, max_iters + 1):
         _, j = index.query(reflect_points(queries, normal, offset))
         n_new, b_new, se = point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
         moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
-        normal, offset = n_new, b_new
-        if moved < max(tol_angle, tol_se * math.degrees(se)):
+        step = n_new - normal
+        ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
+        normal, offset, prev_step = n_new, b_new, step
+        if moved * ahead < max(tol_angle, tol_se * math.degrees(se)):
             break
     return normal, offset, it
 

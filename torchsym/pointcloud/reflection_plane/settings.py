@@ -135,9 +135,9 @@ class ReflectionPlaneSettings(Settings):
         0.1, "quantile of nearest-neighbour distances that sets the search's kernel widths", low=0.0, high=1.0
     )
     tol_se: float = setting(
-        1.0,
+        0.0,
         "iterative stages (alternation, pre-alignment, kernel) also converge once a step moves the plane less than "
-        "this many standard errors of their fit (0: their absolute tolerances alone)",
+        "this many standard errors of their fit (0, the default: their absolute tolerances alone)",
         unit="x standard error", low=0.0,
     )
     n_chance_planes: int = setting(
