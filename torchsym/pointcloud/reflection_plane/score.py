@@ -57,7 +57,8 @@ def chance_corrected_score(
     normals = sphere_normals(n_planes, dtype=torch.float64).to(points) @ q.to(points).T  # (K, 3)
     offsets = -(probe @ normals.T).median(0).values  # (K,)
     moved = reflect_points(probe.expand(n_planes, -1, -1), normals, offsets)  # (K, P, 3)
-    d, _ = index.query(moved.reshape(-1, 3))
+    # only "within tol" matters: a bounded search skips the far queries, the slow ones
+    d, _ = index.query(moved.reshape(-1, 3), max_distance=2.0 * tol)
     d = d.reshape(n_planes, -1)  # (K, P)
     off_plane = (probe @ normals.T + offsets).abs().T > tol  # (K, P)
     counts = off_plane.sum(1).clamp_min(1)
