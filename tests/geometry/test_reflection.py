@@ -7,6 +7,7 @@ from torchsym.errors import InputShapeError, InputValueError
 from torchsym.geometry import (
     angles_to_normal,
     normal_to_angles,
+    pair_fit_errors,
     plane_angle,
     plane_distance,
     plane_from_pairs,
@@ -200,3 +201,27 @@ class TestSpreadNormals:
         assert spread_normals(normals, order, 5, 10.0) == [1, 4, 3]
         assert spread_normals(normals, order, 2, 10.0) == [1, 4]
         assert spread_normals(normals, order, 5, 1.0) == [1, 0, 4, 2, 3]
+
+
+class TestPairFitErrors:
+    def test_exact_pairs_have_no_error(self):
+        p = torch.randn(200, 3, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+        n = torch.tensor([0.0, 0.6, 0.8], dtype=torch.float64)
+        angle, offset = pair_fit_errors(p, reflect_points(p, n, 0.1))
+        assert float(angle) < 1e-6 and float(offset) < 1e-6
+
+    def test_matches_the_spread_of_repeated_fits(self):
+        """The standard error predicts the spread of the fitted normal over noise draws."""
+        g = torch.Generator().manual_seed(1)
+        p = torch.randn(400, 3, generator=g, dtype=torch.float64)
+        n = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)
+        q0 = reflect_points(p, n, 0.0)
+        angles, ses = [], []
+        for _ in range(200):
+            q = q0 + 0.02 * torch.randn(q0.shape, generator=g, dtype=torch.float64)
+            fit, _ = plane_from_pairs(p, q)
+            angles.append(float(plane_angle(fit, n)))
+            ses.append(float(pair_fit_errors(p, q)[0]))
+        rms = math.sqrt(sum(a * a for a in angles) / len(angles))  # two directions of error
+        se = sum(ses) / len(ses)
+        assert 0.5 * se < rms < 2.0 * math.sqrt(2.0) * se

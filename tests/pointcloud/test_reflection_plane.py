@@ -288,3 +288,35 @@ class TestSynthetic:
         n, b = torchsym.data.sample_plane()
         res = torchsym.detect(torchsym.data.sample_path("chair.ply"))
         assert _same_plane(res, n, b, atol_deg=1e-2, atol_off=1e-3)
+
+
+class TestScoreCalibration:
+    """The score compares the plane's mirror share with the best of random planes."""
+
+    @staticmethod
+    def _mixture(n: int, seed: int) -> torch.Tensor:
+        g = torch.Generator().manual_seed(seed)
+        means = torch.randn(5, 3, generator=g) * 2
+        factors = torch.randn(5, 3, 3, generator=g) * 0.6
+        which = torch.multinomial(torch.rand(5, generator=g) + 0.2, n, replacement=True, generator=g)
+        return means[which] + (factors[which] @ torch.randn(n, 3, 1, generator=g))[..., 0]
+
+    @pytest.mark.slow
+    def test_gaussian_mixtures_score_low(self):
+        for seed in range(4):
+            assert detect_reflection_plane(self._mixture(2000, seed)).score < 0.3
+
+    @pytest.mark.slow
+    def test_mirror_completed_clouds_score_high(self):
+        for seed in range(3):
+            assert detect_reflection_plane(planted_symmetric_cloud(2000, generator=seed).points).score > 0.7
+
+    def test_coplanar_points_score_zero(self):
+        g = torch.Generator().manual_seed(3)
+        pts = torch.cat([torch.rand(800, 2, generator=g), torch.zeros(800, 1)], 1)
+        assert detect_reflection_plane(pts).score == 0.0
+
+    def test_raw_share(self):
+        """``n_chance_planes=0`` gives the share of off-plane points that are inliers."""
+        res = detect_reflection_plane(planted_symmetric_cloud(1000, generator=0).points, n_chance_planes=0)
+        assert res.score > 0.95

@@ -24,6 +24,7 @@ __all__ = [
     "normal_to_angles",
     "plane_angle",
     "plane_distance",
+    "pair_fit_errors",
     "plane_from_pairs",
     "plane_from_reflection",
     "point_plane_distance",
@@ -199,22 +200,17 @@ def plane_from_pairs(
     elif weights.shape != points.shape[:-1]:
         raise InputShapeError(f"weights: expected {tuple(points.shape[:-1])}, got {tuple(weights.shape)}")
     w = weights.to(points.dtype)
-    wsum = w.sum(-1).clamp_min(torch.finfo(points.dtype).tiny)  # (...)
     mid = 0.5 * (points + mirrors)  # (..., N, D)
-    chord = points - mirrors  # (..., N, D)
-    eye = torch.eye(d, dtype=points.dtype, device=points.device)
-    wu = chord * w.unsqueeze(-1)
-    perp = (wu * chord).sum((-1, -2))[..., None, None] * eye - wu.transpose(-1, -2) @ chord  # (..., D, D)
     if constraint == "normal":
-        mean_m = (mid * w.unsqueeze(-1)).sum(-2) / wsum.unsqueeze(-1)  # (..., D)
-        mc = mid - mean_m.unsqueeze(-2)
-        cov = (mc * w.unsqueeze(-1)).transpose(-1, -2) @ mc
-        mat = lam * perp + cov
-        mat = 0.5 * (mat + mat.transpose(-1, -2))
+        mat, mean_m = _normal_form(points, mirrors, w, lam)
         _, vecs = torch.linalg.eigh(mat)
         n = vecs[..., :, 0]
         b = -(n * mean_m).sum(-1)
     else:
+        chord = points - mirrors  # (..., N, D)
+        wu = chord * w.unsqueeze(-1)
+        eye = torch.eye(d, dtype=points.dtype, device=points.device)
+        perp = (wu * chord).sum((-1, -2))[..., None, None] * eye - wu.transpose(-1, -2) @ chord  # (..., D, D)
         mh = torch.cat([mid, torch.ones_like(mid[..., :1])], dim=-1)  # (..., N, D+1)
         mat = (mh * w.unsqueeze(-1)).transpose(-1, -2) @ mh
         mat = mat.clone()
@@ -226,6 +222,50 @@ def plane_from_pairs(
         norm = n.norm(dim=-1).clamp_min(torch.finfo(points.dtype).tiny)
         n, b = n / norm.unsqueeze(-1), b / norm
     return canonical_sign(n, b)
+
+
+def _normal_form(points: torch.Tensor, mirrors: torch.Tensor, w: torch.Tensor, lam: float):
+    """The ``(..., D, D)`` matrix of :func:`plane_from_pairs` under ``|n| = 1`` and the
+    weighted mean midpoint ``(..., D)``."""
+    d = points.shape[-1]
+    wsum = w.sum(-1).clamp_min(torch.finfo(points.dtype).tiny)  # (...)
+    mid = 0.5 * (points + mirrors)  # (..., N, D)
+    chord = points - mirrors  # (..., N, D)
+    eye = torch.eye(d, dtype=points.dtype, device=points.device)
+    wu = chord * w.unsqueeze(-1)
+    perp = (wu * chord).sum((-1, -2))[..., None, None] * eye - wu.transpose(-1, -2) @ chord  # (..., D, D)
+    mean_m = (mid * w.unsqueeze(-1)).sum(-2) / wsum.unsqueeze(-1)  # (..., D)
+    mc = mid - mean_m.unsqueeze(-2)
+    mat = lam * perp + (mc * w.unsqueeze(-1)).transpose(-1, -2) @ mc
+    return 0.5 * (mat + mat.transpose(-1, -2)), mean_m
+
+
+def pair_fit_errors(
+    points: torch.Tensor, mirrors: torch.Tensor, weights: torch.Tensor | None = None
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Standard errors of the least-squares reflection :func:`plane_from_pairs` fits to
+    the pairs ``points, mirrors (..., N, D)`` (``weights (..., N)``, default 1).
+
+    With ``l_1 <= l_2`` the two smallest eigenvalues of the fit's matrix, the residual
+    energy per pair is ``s^2 = l_1 / (m - D)`` (``m``: the effective number of pairs,
+    ``(sum w)^2 / sum w^2``), and on the unit sphere the energy rises as
+    ``(l_2 - l_1) t^2`` along the least determined direction, so the normal's standard
+    error is ``sqrt(s^2 / (l_2 - l_1))`` radians and the offset's ``sqrt(s^2 / sum w)``
+    (the usual Gauss-Newton covariance of a least-squares fit).
+
+    Returns:
+        ``angle (...)`` in radians and ``offset (...)`` in the points' units.
+    """
+    w = torch.ones(points.shape[:-1], dtype=points.dtype, device=points.device) if weights is None else weights.to(points.dtype)
+    d = points.shape[-1]
+    mat, _ = _normal_form(points, mirrors, w, 0.25)
+    lams = torch.linalg.eigvalsh(mat)  # (..., D) ascending
+    tiny = torch.finfo(points.dtype).tiny
+    wsum = w.sum(-1).clamp_min(tiny)
+    m_eff = wsum**2 / (w * w).sum(-1).clamp_min(tiny)
+    var = lams[..., 0].clamp_min(0) / (m_eff - d).clamp_min(1.0) * (wsum / m_eff)  # per unit weight
+    angle = (var / (lams[..., 1] - lams[..., 0]).clamp_min(tiny)).sqrt()
+    return angle, (var / wsum).sqrt()
 
 
 def tangent_basis(normal: torch.Tensor) -> torch.Tensor:

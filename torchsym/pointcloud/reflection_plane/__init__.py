@@ -3,7 +3,8 @@
 Stages, in the order :func:`detect_reflection_plane` runs them: :mod:`.prepare`
 (normalise, sample, subsample), :mod:`.candidates` (Algorithm 5), :mod:`.starts` with
 :mod:`.prealign` (starts refined on the subsample), :mod:`.alternation` and :mod:`.polish`
-(Algorithm 6), :mod:`.kernel` (kernel correlation for noisy clouds), :mod:`.result`.
+(Algorithm 6), :mod:`.kernel` (kernel correlation for noisy clouds), :mod:`.result` with
+:mod:`.score` (the mirror share against chance).
 """
 
 from torchsym.pointcloud.reflection_plane.detect import ReflectionPlaneDetector, detect_reflection_plane

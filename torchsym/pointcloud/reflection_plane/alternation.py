@@ -10,11 +10,11 @@ import math
 
 import torch
 
-from torchsym.geometry.reflection import plane_angle, plane_from_pairs, plane_from_reflection, reflect_points
+from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, plane_from_reflection, reflect_points
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 from torchsym.pointcloud.reflection_plane.settings import AlternationSettings
 
-__all__ = ["alternate", "fit_pairs", "lower_quantile"]
+__all__ = ["alternate", "fit_pairs", "lower_quantile", "remaining_factor", "step_tolerances"]
 
 #: quantile of the residuals that judges progress (extrapolation, stalls, the best plane)
 PROGRESS_QUANTILE = 0.25
@@ -51,6 +51,32 @@ def fit_pairs(points: torch.Tensor, nn_idx: torch.Tensor, keep: torch.Tensor, up
     rhs = 0.5 * ((p @ s.T) + q).mean(0)
     c = center + n * ((rhs - center) @ n)
     return n, -(n * c).sum()
+
+
+def step_tolerances(
+    points: torch.Tensor, mirrors: torch.Tensor, tol_angle: float, tol_offset: float, tol_se: float, weights=None
+) -> tuple[float, float]:
+    """The angle (degrees) and offset moves below which a step counts as converged: the
+    absolute tolerances, or ``tol_se`` standard errors of the reflection fitted to the pairs
+    ``points, mirrors (M, 3)`` (weights ``(M,)``; :func:`~torchsym.geometry.pair_fit_errors`),
+    whichever is larger. A fit cannot locate the plane better than its residuals allow."""
+    if tol_se <= 0 or points.shape[0] <= points.shape[1] + 1:
+        return tol_angle, tol_offset
+    se_angle, se_offset = pair_fit_errors(points, mirrors, weights)
+    return max(tol_angle, tol_se * math.degrees(float(se_angle))), max(tol_offset, tol_se * float(se_offset))
+
+
+def remaining_factor(step: torch.Tensor, previous: torch.Tensor | None) -> float:
+    """``1 / (1 - r)``: how far a linearly converging sequence still goes, in units of its
+    last ``step (3,)`` (normal change), with ``r`` the ratio of ``step`` to the ``previous``
+    one projected on it, clipped to [0, 0.95]; 1 without a previous step. Nearest-neighbour
+    steps creep by near-constant amounts (r near 1); a step below the tolerance then does
+    not mean the plane has arrived."""
+    if previous is None:
+        return 1.0
+    denom = float(previous @ previous)
+    r = float(step @ previous) / denom if denom > 0 else 0.0
+    return 1.0 / (1.0 - min(max(r, 0.0), 0.95))
 
 
 def _evaluate(points: torch.Tensor, index: KNNIndex, normal: torch.Tensor, offset: torch.Tensor):
@@ -90,6 +116,7 @@ def alternate(
     max_iters: int | None = None,
     tol_angle: float | None = None,
     max_residual: float = float("inf"),
+    tol_se: float = 0.0,
 ):
     """Algorithm 6 on ``points (N, 3)`` (queried against ``index`` over the same points).
 
@@ -97,7 +124,10 @@ def alternate(
     mutual, trimmed pairs and refits the plane (``settings.update``). With
     ``settings.accelerate`` a step is extrapolated (x2, x4, ...) while the progress
     residual (lower quartile of the residuals) falls. Ends when a step moves the normal
-    less than ``tol_angle`` degrees and the offset less than ``tol_offset`` (converged), or
+    less than ``tol_angle`` degrees and the offset less than ``tol_offset``, or (when larger)
+    than ``tol_se`` standard errors of the fit (:func:`step_tolerances`), the step counted
+    with what a linearly converging sequence still has to go (:func:`remaining_factor`,
+    with ``tol_se > 0``; converged), or
     after ``patience`` steps without a lower progress residual (the best plane is kept).
     ``max_iters`` and ``tol_angle`` default to the settings'.
 
@@ -113,6 +143,7 @@ def alternate(
     dist, nn_idx, med = _evaluate(points, index, normal, offset)
     best = (normal, offset, med)
     stalled = 0
+    prev_step = None
     for it in range(1, max_iters + 1):
         keep = _kept_pairs(points, dist, nn_idx, max_residual)
         center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
@@ -121,11 +152,15 @@ def alternate(
             n_new, b_new = -n_new, -b_new
         d_angle = float(plane_angle(n_new, normal)) * 180.0 / math.pi
         d_off = float((b_new - offset).abs())
-        if d_angle < tol_angle and d_off < settings.tol_offset:
+        tol_a, tol_b = step_tolerances(points[keep], points[nn_idx[keep]], tol_angle, settings.tol_offset, tol_se)
+        step = n_new - normal
+        ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
+        prev_step = step
+        if d_angle * ahead < tol_a and d_off * ahead < tol_b:
             # the residuals of the previous plane, which moved by at most the tolerances
             return n_new, b_new, it, True, med, dist, nn_idx
         d_new, j_new, m_new = _evaluate(points, index, n_new, b_new)
-        if settings.accelerate and float(plane_angle(n_new, normal)) * 180.0 / math.pi > 50 * tol_angle:
+        if settings.accelerate and d_angle > tol_a:
             n_new, b_new, d_new, j_new, m_new = _extrapolate(points, index, normal, offset, n_new, b_new, d_new, j_new, m_new)
         normal, offset, dist, nn_idx, med = n_new, b_new, d_new, j_new, m_new
         if bool(med < best[2]):

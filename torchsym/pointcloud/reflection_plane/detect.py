@@ -27,6 +27,7 @@ from torchsym.pointcloud.reflection_plane.kernel import needs_kernel, refine_by_
 from torchsym.pointcloud.reflection_plane.polish import polish
 from torchsym.pointcloud.reflection_plane.prepare import dense_part, normalise, subsample
 from torchsym.pointcloud.reflection_plane.result import ReflectionPlaneResult, make_result, mirror_pairs
+from torchsym.pointcloud.reflection_plane.score import chance_corrected_score
 from torchsym.pointcloud.reflection_plane.settings import ReflectionPlaneSettings
 from torchsym.pointcloud.reflection_plane.starts import principal_axes, refine_context, search_starts
 
@@ -102,14 +103,15 @@ def detect_reflection_plane(
         kpts, kindex = subs.dense if subs.dense is not None else dense_part(subs.sub, subs.index, settings.dense)
         normal, offset, refined = refine_by_kernel(
             kpts, kindex, normal, offset, [*axes, *search.ranked(settings.kernel.n_starts)], settings.kernel,
-            n_directions=settings.init.n_directions, min_separation=settings.starts.min_separation,
+            n_directions=settings.init.n_directions, min_separation=settings.starts.min_separation, tol_se=settings.tol_se,
         )
         if refined:
             dist, nn_idx = full_index.query(reflect_points(xs, normal, offset))
         t_kernel = time.perf_counter() - t_kernel
 
-    # 5. Mirror pairs, inliers and the centre c, in input units.
+    # 5. Mirror pairs, inliers and the centre c, in input units; the score against chance.
     found = mirror_pairs(xs, dist, nn_idx, tol, normal, offset)
+    score = chance_corrected_score(xs, full_index, dist, normal, offset, tol, gen, n_planes=settings.n_chance_planes)
     t_end = time.perf_counter()
     iterations = search.iterations + polished.iterations
     log.info(
@@ -124,7 +126,7 @@ def detect_reflection_plane(
         "total": t_end - t0,
     }
     return make_result(
-        norm, normal, offset, found, dist, tol, pts.dtype,
+        norm, normal, offset, found, dist, tol, score, pts.dtype,
         iterations=iterations, converged=polished.converged, n_starts=search.tried, timings=timings,
     )
 

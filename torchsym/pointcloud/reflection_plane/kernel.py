@@ -12,9 +12,10 @@ import math
 
 import torch
 
-from torchsym.geometry.reflection import plane_angle, plane_from_pairs, reflect_points, spread_normals
+from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, reflect_points, spread_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.geometry.sampling import sphere_normals
+from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
 from torchsym.pointcloud.reflection_plane.prealign import local_pca
 
 __all__ = ["kernel_refine", "kernel_score", "needs_kernel", "refine_by_kernel", "surface_variation"]
@@ -45,19 +46,23 @@ def kernel_score(points, index, normal, offset, width: float, k: int = 8):
     return float(value) if value.dim() == 0 else value
 
 
-def kernel_refine(points, index, normal, offset, width: float, *, k: int = 8, max_iters: int = 15, tol_angle: float = 0.01):
+def kernel_refine(
+    points, index, normal, offset, width: float, *, k: int = 8, max_iters: int = 15, tol_angle: float = 0.01, tol_se: float = 0.0
+):
     """Maximise :func:`kernel_score` from ``(normal, offset)`` by reweighted least squares.
 
     Each step pairs every point with the ``k`` nearest points to its reflection, weighted
     by ``exp(-d^2 / 2 width^2)``, and fits the least-squares reflection (Eq. 5.6) to the
-    weighted pairs. Stops when the normal moves less than ``tol_angle`` degrees, after
-    ``max_iters`` steps, or when every weight is 0.
+    weighted pairs. Stops when the normal moves less than ``tol_angle`` degrees or
+    ``tol_se`` standard errors of the weighted fit, whichever is larger, after ``max_iters``
+    steps, or when every weight is 0.
 
     Returns:
         ``(normal, offset, steps)``: ``steps`` fits made.
     """
     k = min(k, index.points.shape[0])
     steps = 0
+    prev_step = None
     for _ in range(max_iters):
         d, j = index.query(reflect_points(points, normal, offset), k=k)  # (N, k)
         w = torch.exp(-0.5 * (d / width) ** 2).reshape(-1)  # (N k,)
@@ -65,12 +70,16 @@ def kernel_refine(points, index, normal, offset, width: float, *, k: int = 8, ma
             break
         steps += 1
         src = points.repeat_interleave(k, dim=0)  # (N k, 3) each point k times
-        new_n, new_b = plane_from_pairs(src, index.points[j.reshape(-1)].to(points.dtype), w.to(points.dtype))
+        dst, w = index.points[j.reshape(-1)].to(points.dtype), w.to(points.dtype)
+        new_n, new_b = plane_from_pairs(src, dst, w)
         if float(new_n @ normal) < 0:
             new_n, new_b = -new_n, -new_b
         moved = math.degrees(float(plane_angle(new_n, normal)))
-        normal, offset = new_n, new_b
-        if moved < tol_angle:
+        step = new_n - normal
+        ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
+        normal, offset, prev_step = new_n, new_b, step
+        tol = max(tol_angle, tol_se * math.degrees(float(pair_fit_errors(src, dst, w)[0]))) if tol_se > 0 else tol_angle
+        if moved * ahead < tol:
             break
     return normal, offset, steps
 
@@ -86,14 +95,16 @@ def needs_kernel(dist, tol: float, points, index, eigenvalues, settings) -> bool
     )
 
 
-def refine_by_kernel(points, index, normal, offset, starts, settings, *, n_directions: int, min_separation: float):
+def refine_by_kernel(
+    points, index, normal, offset, starts, settings, *, n_directions: int, min_separation: float, tol_se: float = 0.0
+):
     """The plane of highest kernel correlation of ``points (N, 3)`` (``index`` over them).
 
     Refines ``(normal, offset)``, the planes ``starts`` and the ``settings.n_scan_starts``
     best of ``n_directions`` sphere normals by kernel score (planes through the centroid,
     at least ``min_separation`` degrees apart) for ``settings.max_iters`` steps each, then
     the best to ``settings.final_max_iters``. The kernel width is ``settings.width_factor``
-    x the median residual of ``(normal, offset)``.
+    x the median residual of ``(normal, offset)``; ``tol_se`` as in :func:`kernel_refine`.
 
     Returns ``(normal, offset, refined)``; ``refined`` is False (the plane unchanged) when
     that width is 0.
@@ -109,11 +120,14 @@ def refine_by_kernel(points, index, normal, offset, starts, settings, *, n_direc
     scan = [(cand[j], -(cand[j] @ centroid)) for j in best]
     chosen = None
     for nk, bk in [(normal, offset), *starts, *scan]:
-        nk, bk, _ = kernel_refine(points, index, nk, bk, width, k=k, max_iters=settings.max_iters, tol_angle=settings.tol_angle)
+        nk, bk, _ = kernel_refine(
+            points, index, nk, bk, width, k=k, max_iters=settings.max_iters, tol_angle=settings.tol_angle, tol_se=tol_se
+        )
         value = kernel_score(points, index, nk, bk, width, k=k)
         if chosen is None or value > chosen[0]:
             chosen = (value, nk, bk)
     normal, offset, _ = kernel_refine(
-        points, index, chosen[1], chosen[2], width, k=k, max_iters=settings.final_max_iters, tol_angle=settings.tol_angle
+        points, index, chosen[1], chosen[2], width, k=k, max_iters=settings.final_max_iters, tol_angle=settings.tol_angle,
+        tol_se=tol_se,
     )
     return normal, offset, True

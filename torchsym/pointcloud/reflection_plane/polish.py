@@ -62,7 +62,8 @@ def polish(
             pol, pol_index = xs, index
             pol_spacing, full_spacing = spacing(xs, index, generator, q=(settings.spacing_quantile, 0.5))
         normal, offset, iterations, converged, _, pdist, pnn = alternate(
-            pol, pol_index, normal, offset, settings.alternation, max_residual=settings.inlier_factor * pol_spacing
+            pol, pol_index, normal, offset, settings.alternation, max_residual=settings.inlier_factor * pol_spacing,
+            tol_se=settings.tol_se,
         )
         if pol is xs and pdist is not None:
             final = (pdist, pnn)

@@ -12,6 +12,7 @@ import torch
 
 from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
+from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
 
 __all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
 
@@ -35,7 +36,9 @@ def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
 
     ``x, q, nu (N, 3)``: points, their matches and the matches' normals. The normal moves
     in its tangent plane, the offset freely; Cauchy weights with scale 2.5 x the median
-    absolute residual (``robust=False``: all 1). Returns ``(normal (3,), offset ())``.
+    absolute residual (``robust=False``: all 1). Returns ``(normal (3,), offset (),
+    standard error ())``: the standard error of the new normal in radians, from the
+    Gauss-Newton covariance ``s^2 (J^T W J)^-1`` with ``s^2`` the weighted residual variance.
     """
     dtype = x.dtype
     basis = tangent_basis(normal)  # (3, 2)
@@ -53,25 +56,33 @@ def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
     step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype, device=x.device), g[:, None]).solution[:, 0]
     m = normal + basis @ step[:2]
     norm = m.norm()
-    return m / norm, (offset + step[2]) / norm
+    var = float((w * r * r).sum() / (w.sum() - 3).clamp_min(1.0))
+    se = math.sqrt(var * float(torch.linalg.eigvalsh(torch.linalg.pinv(a)[:2, :2])[-1].clamp_min(0)))
+    return m / norm, (offset + step[2]) / norm, se
 
 
-def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, tol_angle: float):
+def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, tol_angle: float, tol_se: float = 0.0):
     """Point-to-plane Gauss-Newton from one start: mirror images of ``queries (Q, 3)``
     matched in ``targets (M, 3)`` (normals ``nu (M, 3)``, ``index`` over ``targets``),
-    until the normal moves less than ``tol_angle`` degrees or after ``max_iters`` steps.
+    until the normal moves less than ``tol_angle`` degrees or ``tol_se`` standard errors of
+    the step's fit, whichever is larger (the step counted with what is left to go,
+    :func:`~torchsym.pointcloud.reflection_plane.alternation.remaining_factor`), or after
+    ``max_iters`` steps.
 
     Returns ``(normal, offset, steps)``.
     """
     it = 0
+    prev_step = None
     for it in range(1, max_iters + 1):
         _, j = index.query(reflect_points(queries, normal, offset))
-        n_new, b_new = point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
+        n_new, b_new, se = point_to_plane_step(queries, targets[j], nu[j], normal, offset, robust=True)
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
         moved = float(plane_angle(n_new, normal)) * 180.0 / math.pi
-        normal, offset = n_new, b_new
-        if moved < tol_angle:
+        step = n_new - normal
+        ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
+        normal, offset, prev_step = n_new, b_new, step
+        if moved * ahead < max(tol_angle, tol_se * math.degrees(se)):
             break
     return normal, offset, it
 

@@ -33,7 +33,9 @@ class ReflectionPlaneResult(Result):
         residual: median distance from a point's mirror image to its nearest point, over
             all points, in input units, at the plane of the last Algorithm 6 step (within
             the alternation's tolerances of ``normal``/``offset``).
-        score: share of points that are inliers, in [0, 1].
+        score: in [0, 1], the share of points off the plane whose mirror image lands within
+            the tolerance, corrected for chance: ``(s - s0) / (1 - s0)`` with ``s0`` the
+            median share under random planes through the cloud (0: no better than chance).
         tolerance: the inlier distance used (``inlier_factor`` x the median spacing), in
             input units.
         iterations: alignment steps taken by the winning start (subsample + whole cloud).
@@ -96,6 +98,7 @@ def make_result(
     found: MirrorPairs,
     dist: torch.Tensor,
     tol: float,
+    score: float,
     out_dtype: torch.dtype,
     *,
     iterations: int,
@@ -104,7 +107,7 @@ def make_result(
     timings: dict[str, float],
 ) -> ReflectionPlaneResult:
     """The result in input units and ``out_dtype``, normal sign made canonical; ``dist``
-    and ``tol`` as in :func:`mirror_pairs`, the other fields as in the result."""
+    and ``tol`` as in :func:`mirror_pairs`, ``score`` and the other fields as in the result."""
     normal, offset = canonical_sign(normal, offset)
     normal_o = normal.to(out_dtype)
     offset_o = (offset * norm.scale - (normal * norm.origin).sum()).to(out_dtype)
@@ -118,7 +121,7 @@ def make_result(
         pairs=found.pairs,
         inliers=found.inliers,
         residual=float(dist.median()) * norm.scale,
-        score=float(found.inliers.float().mean()),
+        score=float(score),
         tolerance=tol * norm.scale,
         iterations=int(iterations),
         converged=bool(converged),

@@ -134,6 +134,15 @@ class ReflectionPlaneSettings(Settings):
     spacing_quantile: float = setting(
         0.1, "quantile of nearest-neighbour distances that sets the search's kernel widths", low=0.0, high=1.0
     )
+    tol_se: float = setting(
+        0.0,
+        "iterative stages (alternation, pre-alignment, kernel) also converge once a step moves the plane less than "
+        "this many standard errors of their fit (0, the default: their absolute tolerances alone)",
+        unit="x standard error", low=0.0,
+    )
+    n_chance_planes: int = setting(
+        64, "random planes whose highest mirror share is the score's chance level (0: the raw share)", low=0
+    )
     init: InitSettings = group(InitSettings)
     starts: StartsSettings = group(StartsSettings)
     refine: RefineSettings = group(RefineSettings)

@@ -135,14 +135,14 @@ def _align(nk, bk, ctx: RefineContext, settings: ReflectionPlaneSettings):
         raw = (nk, bk, *support(ctx.sub, ctx.index, nk, bk, ctx.tol))
         nk, bk, steps = pre_align(
             ctx.queries, ctx.sub, ctx.index, ctx.normals, nk, bk,
-            max_iters=settings.prealign.max_iters, tol_angle=settings.prealign.tol_angle,
+            max_iters=settings.prealign.max_iters, tol_angle=settings.prealign.tol_angle, tol_se=settings.tol_se,
         )
         frac, med = support(ctx.sub, ctx.index, nk, bk, ctx.tol)
         if (raw[2], -raw[3]) > (frac, -med):
             # the steps made it worse (an exact principal axis jittered on a subsample)
             nk, bk, frac, med = raw
     else:
-        nk, bk, steps = alternate(ctx.sub, ctx.index, nk, bk, settings.alternation)[:3]
+        nk, bk, steps = alternate(ctx.sub, ctx.index, nk, bk, settings.alternation, tol_se=settings.tol_se)[:3]
         frac, med = support(ctx.sub, ctx.index, nk, bk, ctx.tol)
     return nk, bk, frac, med, steps
 
@@ -172,6 +172,7 @@ def _fallback(search: StartSearch, ctx: RefineContext, settings: ReflectionPlane
         nk, bk, it_a = alternate(
             ctx.sub, ctx.index, nk, bk, alt,
             max_iters=settings.refine.fallback_max_iters, tol_angle=max(alt.tol_angle, settings.prealign.tol_angle),
+            tol_se=settings.tol_se,
         )[:3]
         frac, med = support(ctx.sub, ctx.index, nk, bk, ctx.tol)
         refined.append(frac)
