@@ -56,3 +56,25 @@ def test_the_first_error_in_the_order_given_is_raised_after_every_task_ended():
 
 def test_no_tasks():
     assert run_branches([]) == []
+
+
+def test_torch_threads_bound_the_branches_and_kd_tree_queries():
+    import torch
+
+    from torchsym.core.parallel import thread_budget
+    from torchsym.matching.knn import KNNIndex
+
+    before = torch.get_num_threads()
+    try:
+        torch.set_num_threads(1)
+        assert thread_budget() == 1
+        out = run_branches([threading.get_ident, threading.get_ident])  # default: the budget
+        assert out == [threading.get_ident()] * 2
+        pts = torch.randn(30000, 3, generator=torch.Generator().manual_seed(0))
+        d1, i1 = KNNIndex(pts).query(pts + 0.01)
+        torch.set_num_threads(2)
+        assert thread_budget() == 2
+        d2, i2 = KNNIndex(pts).query(pts + 0.01)
+        assert torch.equal(i1, i2) and torch.equal(d1, d2)
+    finally:
+        torch.set_num_threads(before)

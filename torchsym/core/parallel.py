@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
-__all__ = ["run_branches"]
+import torch
+
+__all__ = ["run_branches", "thread_budget"]
 
 T = TypeVar("T")
+
+
+def thread_budget() -> int:
+    """Threads the library may use outside torch (kd-tree queries, solver branches):
+    torch's thread count, so that one ``torch.set_num_threads`` (a user's limit, a dataset
+    runner's worker) bounds them all."""
+    return max(1, torch.get_num_threads())
 
 
 def run_branches(tasks: Sequence[Callable[[], T]], max_workers: int | None = None) -> list[T]:
@@ -25,11 +33,11 @@ def run_branches(tasks: Sequence[Callable[[], T]], max_workers: int | None = Non
 
     Args:
         tasks: the branches.
-        max_workers: threads; default ``min(len(tasks), os.cpu_count())``. 1 runs the
+        max_workers: threads; default ``min(len(tasks), thread_budget())``. 1 runs the
             tasks one after another on the calling thread.
     """
     tasks = list(tasks)
-    workers = min(len(tasks), os.cpu_count() or 1) if max_workers is None else int(max_workers)
+    workers = min(len(tasks), thread_budget()) if max_workers is None else int(max_workers)
     if workers <= 1 or len(tasks) <= 1:
         return [task() for task in tasks]
     with ThreadPoolExecutor(max_workers=workers) as pool:

@@ -19,6 +19,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.core.parallel import thread_budget
 from torchsym.errors import InputValueError
 
 __all__ = ["KNNIndex", "mutual_nearest"]
@@ -32,7 +33,7 @@ class KNNIndex:
 
     Args:
         points: ``(N, D)`` reference points.
-        workers: threads for the CPU kd-tree query (at most 2 on small machines).
+        workers: threads for the CPU kd-tree query (default: :func:`~torchsym.core.parallel.thread_budget` at query time).
         chunk: query rows per ``cdist`` block on non-CPU devices.
         brute_force_max: on non-CPU devices, the most query-point distances a query computes
             by brute force; larger queries go to a kd-tree on the host, built on first use.
@@ -44,7 +45,7 @@ class KNNIndex:
         self,
         points: torch.Tensor,
         *,
-        workers: int = 2,
+        workers: int | None = None,
         chunk: int = 4096,
         brute_force_max: float = BRUTE_FORCE_MAX,
         method: str = "auto",
@@ -90,7 +91,7 @@ class KNNIndex:
             if self._tree is None:
                 self._tree = self._build()
             # threads only pay off on large batches: starting them costs ~0.1 ms each
-            workers = self.workers if queries.shape[0] * k >= 20000 else 1
+            workers = (self.workers or thread_budget()) if queries.shape[0] * k >= 20000 else 1
             d, i = self._tree.query(
                 queries.detach().to("cpu", torch.float64).numpy(), k=k, workers=workers, distance_upper_bound=max_distance
             )

@@ -13,6 +13,7 @@ import numpy as np
 import scipy.linalg
 from scipy.spatial import cKDTree
 
+from torchsym.core.parallel import thread_budget
 from torchsym.mesh.nearest import Nearest, SampledSearch, nearest_profiles
 
 __all__ = [
@@ -38,7 +39,7 @@ def pointwise_to_functional(phi: np.ndarray, area: np.ndarray, vertex_map: np.nd
 
 def functional_to_pointwise(evecs: np.ndarray, fmap: np.ndarray) -> np.ndarray:
     """The point map ``(V,)`` of a self functional map ``fmap (k, k)``: vertex ``i`` goes to the row of ``Phi C^T`` nearest ``Phi[i]``."""
-    return cKDTree(evecs @ fmap.T).query(evecs, k=1, workers=-1)[1].astype(np.int64)
+    return cKDTree(evecs @ fmap.T).query(evecs, k=1, workers=thread_budget())[1].astype(np.int64)
 
 
 def fit_functional(phi_rows: np.ndarray, phi_image: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -84,7 +85,7 @@ def map_consistency(tree: cKDTree, emb: np.ndarray, signs: np.ndarray, rows: np.
     ``signs * emb[i]`` (Sec. 6.2.7); its functional map is fitted by least squares on
     ``rows (S,)``. ``approx``: the search's ``eps`` (images up to ``1 + approx`` times too far).
     """
-    _, target = tree.query(emb[rows] * signs, k=1, eps=approx, workers=-1)
+    _, target = tree.query(emb[rows] * signs, k=1, eps=approx, workers=thread_budget())
     return consistency(emb, signs, rows, target)
 
 

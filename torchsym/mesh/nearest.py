@@ -14,7 +14,7 @@ from functools import partial
 import numpy as np
 from scipy.spatial import cKDTree
 
-from torchsym.core.parallel import run_branches
+from torchsym.core.parallel import run_branches, thread_budget
 
 __all__ = ["Nearest", "SampledSearch", "argmin_profiles", "kdtree", "nearest_profiles", "profile_table"]
 
@@ -133,7 +133,7 @@ class Nearest:
         """For each row of ``queries (Q, D)`` the index of the nearest point, ``(Q,)`` int64."""
         if float(np.median(self.distances(queries[::32]))) > BRUTE_BEYOND * self.spacing:
             return self.brute(queries)
-        return self.tree.query(queries, k=1, workers=-1)[1].astype(np.int64)
+        return self.tree.query(queries, k=1, workers=thread_budget())[1].astype(np.int64)
 
 
 class SampledSearch:
@@ -187,7 +187,7 @@ class SampledSearch:
         queries = self.big[:, :kk] @ fmap  # (V, kk), for every vertex: a product of a subset may round otherwise
         if which is not None:
             queries = queries[which]
-        return self.dense(kk).query(queries, k=1, eps=DENSE_EPS, workers=-1)[1].astype(np.int64)
+        return self.dense(kk).query(queries, k=1, eps=DENSE_EPS, workers=thread_budget())[1].astype(np.int64)
 
     def nearest(self, kk: int, queries: np.ndarray) -> np.ndarray:
         """For each row of ``queries (Q, kk)`` the vertex among the targets whose row of ``Phi`` is nearest (:class:`Nearest`)."""

@@ -25,6 +25,7 @@ import time
 import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
+from torchsym.core.parallel import thread_budget
 from torchsym.mesh.intrinsic.sample import even_subset
 from torchsym.mesh.nearest import kdtree
 from torchsym.mesh.operators import edge_graph, face_areas
@@ -89,8 +90,8 @@ def coarse_copy(vertices: np.ndarray, faces: np.ndarray, n_vertices: int, rng: n
     unit = (v - v.mean(axis=0)) / math.sqrt(float(face_areas(v, faces).sum()))
     seeds = even_subset(unit, np.zeros(0, dtype=np.int64), n_vertices, rng)  # (n,) sorted
     cv, cf = _repair(v[seeds], voronoi_dual(v, faces, seeds))
-    to_input = kdtree(v).query(cv, k=1, workers=-1)[1].astype(np.int64)  # the repair may renumber
-    nearest = kdtree(cv).query(v, k=1, workers=-1)[1].astype(np.int64)
+    to_input = kdtree(v).query(cv, k=1, workers=thread_budget())[1].astype(np.int64)  # the repair may renumber
+    nearest = kdtree(cv).query(v, k=1, workers=thread_budget())[1].astype(np.int64)
     return CoarseCopy(cv, cf, to_input, nearest, time.perf_counter() - tic)
 
 
@@ -105,5 +106,5 @@ def carry_map(copy: CoarseCopy, vertices: np.ndarray, copy_map: np.ndarray) -> n
         return np.full(vertices.shape[0], -1, dtype=np.int64)
     nearest = copy.nearest
     if has.size < copy_map.shape[0]:
-        nearest = has[kdtree(copy.vertices[has]).query(vertices, k=1, workers=-1)[1]]
+        nearest = has[kdtree(copy.vertices[has]).query(vertices, k=1, workers=thread_budget())[1]]
     return copy.to_input[copy_map[nearest]]

@@ -16,6 +16,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
+from torchsym.core.parallel import thread_budget
 from torchsym.core.random import random_subset
 from torchsym.mesh.correction import correct_eigenfunctions
 from torchsym.mesh.fmaps import consistency, map_consistency, pointwise_to_functional
@@ -223,7 +224,7 @@ def extrinsic_candidate(
     plane = detect_reflection_plane(pts, kernel={"enabled": False}, generator=gen)
     nrm, off = plane.normal.numpy(), float(plane.offset)
     mirrored = v - 2.0 * (v @ nrm + off)[:, None] * nrm  # (V, 3)
-    vmap = kdtree(v).query(mirrored, k=1, workers=-1)[1].astype(np.int64)
+    vmap = kdtree(v).query(mirrored, k=1, workers=thread_budget())[1].astype(np.int64)
     cand = Candidate(
         "extrinsic", pairs, pointwise_to_functional(evecs, area, vmap), np.eye(evecs.shape[1]), True, v, mirrored, True, []
     )

@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from torchsym.core.parallel import thread_budget
 from torchsym.mesh.intrinsic.hypotheses import Candidate
 from torchsym.mesh.intrinsic.workspace import Workspace
 from torchsym.mesh.nearest import kdtree
@@ -46,7 +47,7 @@ def thesis_map(chosen: Candidate, eps: float) -> tuple[np.ndarray, float]:
     (approximate with ``eps > 0``), and the seconds taken."""
     tic = time.perf_counter()
     dense_tree = kdtree(chosen.target, balanced=False)
-    return dense_tree.query(chosen.query, k=1, eps=eps, workers=-1)[1].astype(np.int64), time.perf_counter() - tic  # (V',)
+    return dense_tree.query(chosen.query, k=1, eps=eps, workers=thread_budget())[1].astype(np.int64), time.perf_counter() - tic  # (V',)
 
 
 def refined_map(ws: Workspace, chosen: Candidate, timings: dict[str, float]) -> MapState:

@@ -77,7 +77,9 @@ class Extrinsic(Settings):
     """The vertices' mirror plane as a hypothesis when the intrinsic ones are weak (step 10, an extension)."""
 
     enabled: bool = setting(True, "try the plane's map when the chosen intrinsic map is weak")
-    min_score: float = setting(0.75, "least symmetry score of the plane for its map to be used", low=0.0, high=1.0)
+    min_score: float = setting(
+        0.3, "least calibrated score of the plane (asymmetric clouds stay below 0.3) for its map to be used", low=0.0, high=1.0
+    )
     max_points: int = setting(3000, "most vertices the plane is fitted to", low=10)
 
 
