@@ -35,19 +35,33 @@ def _half_texture(rng: np.random.Generator, size: int) -> np.ndarray:
     return np.clip(tex, 0, 1)
 
 
+def _mirror_with_polygon(
+    rng: np.random.Generator, tile: np.ndarray, n_vertices: tuple[int, int], ys: tuple[float, float],
+    xs: tuple[float, float], line_type: int,
+) -> np.ndarray:
+    """Mirror the square ``tile (S, S, ...)`` in place about its middle column and draw a
+    random polygon symmetric about it: ``n_vertices`` (low, high) per side at row and
+    column shares ``ys``, ``xs`` of the side; returns the ``(S, S)`` uint8 mask (255 inside)."""
+    import cv2
+
+    size = tile.shape[0]
+    half = size // 2
+    tile[:, size - half :] = tile[:, :half][:, ::-1]  # mirror about column (size - 1) / 2
+    n = int(rng.integers(*n_vertices))
+    py = np.sort(rng.uniform(ys[0], ys[1], n)) * (size - 1)
+    px = rng.uniform(xs[0], xs[1], n) * (size - 1)
+    c = (size - 1) / 2
+    poly = np.concatenate([np.stack([px, py], 1), np.stack([2 * c - px, py], 1)[::-1]])
+    mask = np.zeros((size, size), np.uint8)
+    cv2.fillPoly(mask, [np.round(poly * 16).astype(np.int32)], 255, line_type, shift=4)
+    return mask
+
+
 def _object(rng: np.random.Generator, size: int) -> tuple[np.ndarray, np.ndarray]:
     import cv2
 
     tex = _half_texture(rng, size)
-    half = size // 2
-    tex[:, size - half :] = tex[:, :half][:, ::-1]  # mirror about column (size - 1) / 2
-    n = int(rng.integers(4, 8))
-    ys = np.sort(rng.uniform(0.05, 0.95, n)) * (size - 1)
-    xs = rng.uniform(0.05, 0.45, n) * (size - 1)
-    c = (size - 1) / 2
-    poly = np.concatenate([np.stack([xs, ys], 1), np.stack([2 * c - xs, ys], 1)[::-1]])
-    mask = np.zeros((size, size), np.uint8)
-    cv2.fillPoly(mask, [np.round(poly * 16).astype(np.int32)], 255, cv2.LINE_AA, shift=4)
+    mask = _mirror_with_polygon(rng, tex, (4, 8), (0.05, 0.95), (0.05, 0.45), cv2.LINE_AA)
     return tex, mask.astype(np.float32) / 255.0
 
 
@@ -183,15 +197,8 @@ def mirrored_photo(
         photos = sorted(glob.glob(os.path.join(photo_dir, "*.jpg")) + glob.glob(os.path.join(photo_dir, "*.png")))
     size = int(0.75 * min(height, width))
     obj = _photo_crop(rng, photos, size, size)
-    half = size // 2
-    obj[:, size - half :] = obj[:, :half][:, ::-1]  # mirror about column (size - 1) / 2
-    n = int(rng.integers(5, 9))
-    ys = np.sort(rng.uniform(0.02, 0.98, n)) * (size - 1)
-    xs = rng.uniform(0.03, 0.4, n) * (size - 1)
+    mask = _mirror_with_polygon(rng, obj, (5, 9), (0.02, 0.98), (0.03, 0.4), cv2.LINE_8)
     c = (size - 1) / 2
-    poly = np.concatenate([np.stack([xs, ys], 1), np.stack([2 * c - xs, ys], 1)[::-1]])
-    mask = np.zeros((size, size), np.uint8)
-    cv2.fillPoly(mask, [np.round(poly * 16).astype(np.int32)], 255, cv2.LINE_8, shift=4)
     mask = np.minimum(mask, mask[:, ::-1])  # exactly symmetric
     ang = rng.uniform(-180, 180)
     scale = rng.uniform(0.85, 1.15)
