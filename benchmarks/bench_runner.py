@@ -308,7 +308,7 @@ def _markdown(res: dict[str, Any]) -> str:
         f"Worker killed (SIGKILL) on the separate cluster after {k['killed_after']} of {k['n']} clouds, against the "
         f"same clouds without a kill, interleaved, twice: clean {', '.join(f'{c:.1f}' for c in k['clean_s'])} s, "
         f"killed {', '.join(f'{c:.1f}' for c in k['killed_s'])} s: **{k['lost_s']:.1f} s lost** on average "
-        f"(the task the worker was running, the other worker draining before the suspect runs alone, and the "
+        f"(the task the worker was running, the one waiting behind it, and the "
         f"cluster at one worker while the nanny restarts it). {k['ok']} of {2 * k['n']} ok, {k['retried']} retried.",
     ]
     d = res["killed_driver"]
@@ -317,7 +317,7 @@ def _markdown(res: dict[str, Any]) -> str:
         f"Driver killed (SIGKILL, with its local cluster) after {d['records_before_kill']} of {d['n']} no-op tasks "
         f"({d['torn_bytes']} torn bytes cut): the resumed run skipped {d['skipped_on_resume']} and ran "
         f"{d['run_on_resume']}; {d['missing']} inputs missing, {d['duplicate_records']} duplicate records, "
-        f"{d['tasks_run_twice']} tasks run twice (those in flight at the kill; at most 2 with 2 workers).",
+        f"{d['tasks_run_twice']} tasks run twice (those in flight at the kill; at most 4: two per worker).",
         "",
         "Scores of the runs (`torchsym evaluate`):",
         "",

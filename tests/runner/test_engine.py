@@ -39,6 +39,33 @@ class TestLocalCluster:
         # resuming runs the crashed input again, nothing else (the auto engine: serial, one input left)
         assert run(probe_config(markers), str(folder), out, imports=[PROBE], engine="local").n_skipped == 4
 
+    def test_batches_split_when_their_worker_dies(self, tmp_path, markers):
+        # quick inputs share tasks once the first ones are timed; the input that kills its
+        # worker every time sits among them, and only it is blamed
+        folder = tmp_path / "in"
+        folder.mkdir()
+        for i in range(24):
+            write_cloud(folder / f"c{i:02d}.xyz", i, 666 if i == 20 else None)
+        out = tmp_path / "r.jsonl"
+        summary = run(probe_config(markers), str(folder), out, engine="local", workers=2, retries=1, imports=[PROBE])
+        assert (summary.n_ok, summary.n_crashed) == (23, 1)
+        rec = _by_name(out)
+        assert rec["c20.xyz"]["status"] == "crashed" and rec["c20.xyz"]["attempts"] == 2
+        assert {r["attempts"] for name, r in rec.items() if name != "c20.xyz"} == {1}
+
+
+def test_take_batches_only_inputs_that_may_share():
+    from collections import deque
+
+    from torchsym.runner.engine import _take
+
+    q = deque([("a", 1, False), ("b", 1, False), ("c", 1, True), ("d", 1, False)])
+    assert [i[0] for i in _take(q, 4)] == ["a", "b"]  # stops before one that runs alone
+    assert [i[0] for i in _take(q, 4)] == ["c"]
+    assert [i[0] for i in _take(q, 4)] == ["d"]
+    q = deque([("a", 1, False), ("b", 1, False), ("c", 1, False)])
+    assert [i[0] for i in _take(q, 2)] == ["a", "b"] and len(q) == 1
+
 
 class TestSeparateScheduler:
     @pytest.fixture(scope="class")

@@ -180,7 +180,7 @@ def run(
         figures: folder for each result's pictures (:func:`torchsym.viz.write_artifacts`);
             None writes none.
         imports: modules each worker imports first (to register your own solvers).
-        max_in_flight: tasks in flight on a Dask engine (default: one per live worker thread; more hides the driver's round trip, but a task queued behind a crashing one is run again).
+        max_in_flight: tasks in flight on a Dask engine (default: two per live worker thread, one running and one waiting, so no worker waits for the driver).
         connect_timeout: seconds to reach a remote scheduler (default 5).
         progress: show a progress bar over completions (skipped inputs counted done).
 

@@ -11,18 +11,21 @@ Three engines give the same records (only where a task runs changes):
   ``dask-jobqueue``.
 
 Each worker sets ``torch.set_num_threads(threads_per_worker)`` and imports torchsym when
-it starts (:class:`~torchsym.runner.worker.WorkerSetup`). One task per live worker thread is in flight
-(``max_in_flight``), so a 100,000-input run never builds a large graph. A worker that dies
-mid-task makes the scheduler raise ``KilledWorker`` for the tasks it held (the local
-cluster is started with ``allowed-failures = 0``); the driver runs such a task again alone
-(so that a second death is its own) up to ``retries`` times, then records it as
-``"crashed"`` (docs/design/runner.md).
+it starts (:class:`~torchsym.runner.worker.WorkerSetup`). Two tasks per live worker thread are in
+flight (``max_in_flight``), so a 100,000-input run never builds a large graph and no worker
+waits for the driver. A worker that dies mid-task makes the scheduler raise ``KilledWorker``
+for the tasks it held (the local cluster is started with ``allowed-failures = 0``); the
+driver runs the task that was running again up to ``retries`` times, then records it as
+``"crashed"``, and resubmits the tasks that were only waiting there uncounted
+(docs/design/runner.md).
 """
 
 from __future__ import annotations
 
 import collections
 import contextlib
+import dataclasses
+import itertools
 import logging
 import time
 from collections.abc import Iterator, Sequence
@@ -32,7 +35,10 @@ from typing import Any
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 from torchsym.runner.task import TaskSpec, run_task
 
-__all__ = ["ENGINES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster", "open_engine", "serial_outcomes"]
+__all__ = [
+    "BATCH_SECONDS", "ENGINES", "MAX_BATCH", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster", "open_engine",
+    "run_batch", "serial_outcomes",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -95,11 +101,13 @@ def _scheduler_target(address: str | None) -> dict[str, Any]:
 def local_cluster(workers: int, threads: int) -> Any:
     """A ``distributed.LocalCluster`` of ``workers`` processes with ``threads`` threads
     each, on loopback, no dashboard, whose scheduler fails a task on its first dead
-    worker (``allowed-failures = 0``: the driver does the retries and counts them)."""
+    worker (``allowed-failures = 0``: the driver does the retries and counts them) and
+    never moves a task between workers (no work stealing: each worker runs its tasks in
+    submission order, which tells a running task from a waiting one when it dies)."""
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0, "distributed.scheduler.work-stealing": False}):
         return LocalCluster(
             n_workers=workers, threads_per_worker=threads, processes=True, host="127.0.0.1",
             dashboard_address=None, silence_logs=logging.ERROR,
@@ -141,9 +149,10 @@ def dask_client(
 
 
 def _capacity(client: Any, max_in_flight: int | None) -> int:
-    """Tasks to keep in flight: ``max_in_flight``, or one per live worker thread."""
+    """Tasks to keep in flight: ``max_in_flight``, or two per live worker thread (one
+    running, one waiting on the worker, so a worker never waits for the driver)."""
     live = sum(client.nthreads().values())
-    return live if max_in_flight is None or live == 0 else max_in_flight
+    return 2 * live if max_in_flight is None or live == 0 else max_in_flight
 
 
 def _error_outcome(exc: BaseException) -> dict[str, Any]:
@@ -151,20 +160,80 @@ def _error_outcome(exc: BaseException) -> dict[str, Any]:
             "error": {"type": type(exc).__name__, "message": str(exc), "where": "engine"}}
 
 
+def _worker_of(exc: BaseException) -> tuple[str | None, int]:
+    """(address, threads) of the worker a ``KilledWorker`` names; ``(None, 1)`` if it names none."""
+    ws = getattr(exc, "last_worker", None)
+    return getattr(ws, "address", None), max(int(getattr(ws, "nthreads", 1) or 1), 1)
+
+
+def _killed_with(fut: Any, exc: BaseException, flying: dict[str, Any]) -> list[tuple[Any, bool]]:
+    """The tasks one worker's death took, oldest first, each with whether it was running.
+
+    The scheduler reports every task of a dead worker in one message, so the others are
+    already erred in ``flying``. A worker runs its tasks in submission order (each task's
+    priority is its place in it), so of the tasks it held the ``threads`` oldest were
+    running and the rest were waiting. A scheduler that steals work (not the local
+    cluster's) can move an older task behind a running one; it is then counted as run.
+    """
+    from distributed.scheduler import KilledWorker
+
+    address, threads = _worker_of(exc)
+    killed = [flying.pop(fut.key)]
+    if address is not None:
+        for key in [k for k, task in flying.items() if task.future.status == "error"]:
+            other = flying[key].future.exception()
+            if isinstance(other, KilledWorker) and _worker_of(other)[0] == address:
+                killed.append(flying.pop(key))
+    killed.sort(key=lambda task: task.order)
+    return [(task, rank < threads) for rank, task in enumerate(killed)]
+
+
+#: a batch of inputs is sized to take about this many seconds on a worker
+BATCH_SECONDS = 0.2
+#: and holds at most this many inputs
+MAX_BATCH = 16
+
+#: an input waiting to run: its spec, the attempt it is at, and whether it runs as a task of its own
+_Item = tuple[TaskSpec, int, bool]
+
+
+@dataclasses.dataclass
+class _Flying:
+    items: tuple[_Item, ...]
+    order: int
+    future: Any
+
+
+def run_batch(specs: Sequence[TaskSpec]) -> list[dict[str, Any]]:
+    """:func:`~torchsym.runner.task.run_task` on each spec in turn (one Dask task)."""
+    return [run_task(spec) for spec in specs]
+
+
+def _take(queue: collections.deque[_Item], size: int) -> tuple[_Item, ...]:
+    """The next task's inputs: one that runs alone, or up to ``size`` that may share a task."""
+    first = queue.popleft()
+    items = [first]
+    while not first[2] and queue and len(items) < size and not queue[0][2]:
+        items.append(queue.popleft())
+    return tuple(items)
+
+
 def dask_outcomes(
     client: Any, specs: Sequence[TaskSpec], *, retries: int, max_in_flight: int | None = None, wait_workers: float = 600.0
 ) -> Iterator[Outcome]:
     """Run ``specs`` on ``client``'s workers, yielding each input's outcome as it completes.
 
-    One task per live worker thread is in flight, or ``max_in_flight``. The scheduler
-    blames every task a dying worker holds, queued or running, and a task sent to a
-    worker dying at that moment: so a task whose worker died is a suspect, not a culprit.
-    No new task is submitted until the tasks in flight are done; then each suspect runs
-    alone on the cluster, where a second death is its own. A suspect runs up to
-    ``retries`` more times, then yields a ``"crashed"`` outcome. With one task per
-    thread no task waits queued on a worker, so ``attempts`` counts the deaths of the
-    task's own worker; a larger ``max_in_flight`` hides the driver's round trip but a
-    task queued behind a crashing one is run again (and counts an attempt).
+    Two tasks per live worker thread are in flight, or ``max_in_flight``: one running and
+    one waiting on the worker, so a worker starts its next task without waiting for the
+    driver. Inputs shorter than ``BATCH_SECONDS`` (by the mean so far) share a task, up to
+    ``MAX_BATCH`` of them, so Dask's cost per task is paid once per batch.
+
+    The scheduler fails every task a dying worker held, running or waiting
+    (``KilledWorker``); of those, the ``threads`` oldest were running. A waiting task is
+    submitted again as it was. A running batch is split and its inputs submitted again
+    one per task, uncounted; a running single input counts an attempt and runs again, up
+    to ``retries`` times, then yields a ``"crashed"`` outcome. So ``attempts`` counts the
+    runs of an input as a task of its own.
 
     Raises:
         EngineError: no worker for ``wait_workers`` seconds.
@@ -172,20 +241,20 @@ def dask_outcomes(
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
-    queue = collections.deque((spec, 1) for spec in specs)
-    suspects: collections.deque[tuple[TaskSpec, int]] = collections.deque()
-    flying: dict[str, tuple[TaskSpec, int]] = {}
+    queue: collections.deque[_Item] = collections.deque((spec, 1, False) for spec in specs)
+    flying: dict[str, _Flying] = {}
     done = as_completed(with_results=True, raise_errors=False)
     token = f"{time.time_ns():x}"
+    order = itertools.count()
     capacity = full = _capacity(client, max_in_flight)
-    while queue or suspects or flying:
-        if suspects and not flying:  # a suspect runs alone
-            todo = [suspects.popleft()]
-        else:
-            todo = [queue.popleft() for _ in range(min(len(queue), capacity - len(flying)))] if not suspects else []
-        for spec, attempt in todo:
-            fut = client.submit(run_task, spec, key=f"torchsym-{token}-{spec.index}-{attempt}", pure=False, retries=0)
-            flying[fut.key] = (spec, attempt)
+    size, seconds, finished = 1, 0.0, 0
+    while queue or flying:
+        while queue and len(flying) < capacity:
+            items = _take(queue, size)
+            n = next(order)
+            specs_n = [item[0] for item in items]
+            fut = client.submit(run_batch, specs_n, key=f"torchsym-{token}-{specs_n[0].index}-{n}", pure=False, retries=0, priority=-n)
+            flying[fut.key] = _Flying(items, n, fut)
             done.add(fut)
         if not flying:  # every worker is gone: wait for one (a nanny restarts them)
             try:
@@ -195,23 +264,36 @@ def dask_outcomes(
             capacity = _capacity(client, max_in_flight)
             continue
         fut, value = next(done)  # the result is gathered in the background
-        spec, attempt = flying.pop(fut.key)
-        if fut.status == "finished":
-            outcome, exc = value, None
-        else:  # KilledWorker, or the task's result could not come back; an error comes as (type, exc, tb)
-            exc = value[1] if isinstance(value, tuple) else value
-            outcome = _error_outcome(exc)
-        fut.release()
+        if fut.key not in flying:  # already handled with the worker death that took it
+            fut.release()
+            continue
+        exc = None if fut.status == "finished" else (value[1] if isinstance(value, tuple) else value)
         if isinstance(exc, KilledWorker) or capacity < full:
             capacity = _capacity(client, max_in_flight)
             full = max(full, capacity)
         if isinstance(exc, KilledWorker):
-            if attempt <= retries:
-                logger.warning("%s: its worker died (attempt %d); to run again alone", spec.input, attempt)
-                suspects.append((spec, attempt + 1))
-                continue
-            outcome = _crashed(attempt, exc)
-        yield spec, outcome, attempt
+            for task, ran in reversed(_killed_with(fut, exc, flying)):
+                for spec, attempt, alone in reversed(task.items):
+                    if not ran:
+                        queue.appendleft((spec, attempt, alone))
+                    elif len(task.items) > 1:
+                        queue.appendleft((spec, attempt, True))
+                    elif attempt <= retries:
+                        logger.warning("%s: its worker died (attempt %d); to run again", spec.input, attempt)
+                        queue.appendleft((spec, attempt + 1, True))
+                    else:
+                        yield spec, _crashed(attempt, exc), attempt
+            fut.release()
+            continue
+        task = flying.pop(fut.key)
+        fut.release()
+        # the task's result could not come back: each input's error (an error comes as (type, exc, tb))
+        outcomes = value if exc is None else [_error_outcome(exc)] * len(task.items)
+        seconds += sum(o["seconds"] for o in outcomes)
+        finished += len(outcomes)
+        size = max(1, min(MAX_BATCH, int(BATCH_SECONDS * finished / max(seconds, 1e-6))))
+        for (spec, attempt, _), outcome in zip(task.items, outcomes, strict=True):
+            yield spec, outcome, attempt
 
 
 @contextlib.contextmanager
