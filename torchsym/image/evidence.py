@@ -164,8 +164,8 @@ def axis_evidence(
     The extent grows past each end by the run of ``bin_length`` bins maximising
     ``sum 2 g . R g' - grow_threshold (|g|^2 + |g'|^2)`` over points whose gradient is
     above ``noise_level`` (the rest add nothing); the run crosses at most ``max_gap``
-    bins without such a point. Why each rule exists, and the ones
-    that were measured and removed: ``docs/design/axes.md``.
+    bins without such a point. Why each rule exists, and the ones that were measured and
+    removed: ``docs/design/axes.md``.
 
     Args:
         gx: ``(H, W)`` x-derivative (:func:`mirror_gradients`).
