@@ -82,7 +82,6 @@ GRID: dict[str, dict[str, dict]] = {
         "thesis + edge_drawing": _merge(THESIS_BC, EDGE_DRAWING),
         "thesis + gradient": _merge(THESIS_BC, {**GRADIENT, **GATHER}),
         "edge_drawing + gradient": _merge(THESIS_BC, {**EDGE_DRAWING, **GRADIENT, **GATHER}),
-        "edge_drawing + gradient + 640": _merge(THESIS_BC, {**EDGE_DRAWING, **GRADIENT, **GATHER, "min_side": 640}),
         "edge_drawing + gradient + sift": _merge(THESIS_BC, {**EDGE_DRAWING, **GRADIENT, **GATHER, **SIFT}),
         "edge_drawing + gradient + sift, no growth": _merge(THESIS_BC, {**EDGE_DRAWING, **GRADIENT, **GATHER, **SIFT,
                                                                         "grow_threshold": None}),
@@ -127,17 +126,21 @@ def source_version() -> str:
     return h.hexdigest()[:12]
 
 
-def run_cached(cache: Path, method: str, overrides: dict | None, path: Path, version: str) -> dict:
-    """``{"axes", "scores", "size", "seconds"}`` of one detection, from the cache when there."""
-    key = hashlib.sha1(json.dumps([method, overrides, str(path), version], sort_keys=True).encode()).hexdigest()
+def run_cached(
+    cache: Path, method: str, overrides: dict | None, image: Path | torch.Tensor, version: str, key_name: str | None = None
+) -> dict:
+    """``{"axes", "scores", "size", "seconds"}`` of one detection of a photograph's path (or
+    an image tensor named ``key_name``), from the cache when there."""
+    name = key_name if key_name is not None else str(image)
+    key = hashlib.sha1(json.dumps([method, overrides, name, version], sort_keys=True).encode()).hexdigest()
     file = cache / f"{key}.json"
     if file.exists():
         return json.loads(file.read_text())
     t0 = time.perf_counter()
     if method == PEER:
-        res = loy_eklundh_axes(read_image(path))
+        res = loy_eklundh_axes(read_image(image) if isinstance(image, Path) else image)
     else:
-        res = torchsym.detect(str(path), CONFIGS[method], **overrides)
+        res = torchsym.detect(str(image) if isinstance(image, Path) else image, CONFIGS[method], **overrides)
     out = {"axes": res.axes.tolist(), "scores": res.scores.tolist(), "size": list(res.image_size),
            "seconds": time.perf_counter() - t0}
     file.write_text(json.dumps(out))
@@ -171,6 +174,47 @@ def oracle(runs: dict[str, dict], gts: dict[str, torch.Tensor], names: list[str]
                 best = (f, t, k - t, g - t)
         tp, fp, fn = tp + best[1], fp + best[2], fn + best[3]
     return {"recall_all_detections": hit / max(n_gt, 1), "f_threshold_per_photo": 2 * tp / max(2 * tp + fp + fn, 1)}
+
+
+def margin_bootstrap(
+    ours: dict[str, dict], peer: dict[str, dict], gts: dict[str, torch.Tensor], split: list[list[str]],
+    n: int = 2000, seed: int = 0,
+) -> dict:
+    """Paired bootstrap over photographs of the held-out margin (ours minus peer) per criterion.
+
+    Each draw resamples the photographs of every fold with replacement (the same draw for
+    both methods) and takes the mean over folds of the per-fold max F difference. Returns
+    per criterion the margin on the photographs as they are, the draws' standard deviation,
+    their 2.5 and 97.5 percentiles, and the fraction of draws above 0.03.
+    """
+    rng = np.random.default_rng(seed)
+    out = {}
+    for c in CRITERIA:
+        hits = {}
+        for name, runs in (("ours", ours), ("peer", peer)):
+            for ph in gts:
+                a = torch.tensor(runs[ph]["axes"]).reshape(-1, 4)
+                s = torch.tensor(runs[ph]["scores"], dtype=torch.float64)
+                ok = match_axes(a, gts[ph], image_size=tuple(runs[ph]["size"]), scores=s, criterion=c)
+                hits[name, ph] = (s.numpy(), ok.numpy(), int(gts[ph].shape[0]))
+
+        def fold_f(name: str, photos: list[str]) -> float:
+            s = np.concatenate([hits[name, p][0] for p in photos])
+            ok = np.concatenate([hits[name, p][1] for p in photos])
+            n_gt = sum(hits[name, p][2] for p in photos)
+            order = np.argsort(-s, kind="stable")
+            tp = np.cumsum(ok[order])
+            f = 2 * tp / (np.arange(1, s.size + 1) + n_gt)
+            last = np.r_[s[order][1:] != s[order][:-1], True]  # a threshold keeps every tie
+            return float(np.max(np.where(last, f, 0.0), initial=0.0))
+
+        def margin(draw: list[list[str]]) -> float:
+            return float(np.mean([fold_f("ours", f) - fold_f("peer", f) for f in draw]))
+
+        draws = np.array([margin([[f[i] for i in rng.integers(0, len(f), len(f))] for f in split]) for _ in range(n)])
+        out[c] = {"margin": margin(split), "sd": float(draws.std()), "low": float(np.percentile(draws, 2.5)),
+                  "high": float(np.percentile(draws, 97.5)), "above_0.03": float(np.mean(draws > 0.03))}
+    return out
 
 
 def n_extensions(label: str) -> int:
@@ -241,18 +285,23 @@ def per_fold_table(runs: dict[str, dict], gts: dict[str, torch.Tensor], split: l
     return out
 
 
-def synthetic_found(method: str, overrides: dict | None, n: int) -> dict:
-    """Planted axes found (challenge criterion) by ``detect`` on ``n`` synthetic images."""
+def synthetic_found(method: str, overrides: dict | None, n: int, cache: Path, version: str) -> dict:
+    """Planted axes found (challenge criterion) by ``detect`` on ``n`` synthetic images
+    (each detection cached like the photographs'), and the seeds of the images with a miss."""
     found = top_k = total = 0
+    missed = []
     for s in range(n):
         img, gt = mirrored_objects_image(2 + s % 2, generator=torch.Generator().manual_seed(1000 + s))
-        res = loy_eklundh_axes(img) if method == PEER else torchsym.detect(img, CONFIGS[method], **overrides)
+        res = run_cached(cache, method, overrides, img, version, key_name=f"synthetic-{1000 + s}")
+        axes, scores = torch.tensor(res["axes"]).reshape(-1, 4), torch.tensor(res["scores"])
         size = tuple(img.shape[-2:])
-        found += int(match_axes(res.axes, gt, image_size=size, scores=res.scores, criterion="challenge").sum())
+        hit = int(match_axes(axes, gt, image_size=size, scores=scores, criterion="challenge").sum())
         k = int(gt.shape[0])
-        top_k += int(match_axes(res.axes[:k], gt, image_size=size, scores=res.scores[:k], criterion="challenge").sum())
-        total += k
-    return {"found": f"{found}/{total}", "found_top_k": f"{top_k}/{total}", "all_found": found == total}
+        top_k += int(match_axes(axes[:k], gt, image_size=size, scores=scores[:k], criterion="challenge").sum())
+        found, total = found + hit, total + k
+        if hit < k:
+            missed.append(1000 + s)
+    return {"found": f"{found}/{total}", "found_top_k": f"{top_k}/{total}", "all_found": found == total, "missed": missed}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -303,11 +352,15 @@ def main(argv: list[str] | None = None) -> int:
             rep["rule"], rep["chosen_on_all"] = rule, choose(cands, gts, split, rule)
             report[method] = rep
             log.info("%s: cv %s", method, {r: {k: v for k, v in cv.items() if k != "folds"} for r, cv in rep["cv"].items()})
+        if "boundary_cliques" in runs:
+            ours = runs["boundary_cliques"][report["boundary_cliques"]["chosen_on_all"]]
+            report["margin_bootstrap"] = margin_bootstrap(ours, runs[PEER]["default"], gts, split)
     if args.synthetic:
         for method in [m for m in args.methods if m in report] + [PEER]:
             label = report[method]["chosen_on_all"] if method != PEER else "default"
             ov = GRID[method][label] if method != PEER else None
-            report.setdefault(method, {})["synthetic"] = {"candidate": label, **synthetic_found(method, ov, args.synthetic)}
+            report.setdefault(method, {})["synthetic"] = {
+                "candidate": label, **synthetic_found(method, ov, args.synthetic, args.cache, version)}
     write_report(report, args.out, args.synthetic)
     return 0
 
@@ -318,13 +371,14 @@ def write_report(report: dict, out: Path, n_syn: int) -> None:
     lines = [
         "# Reflection axes in photographs (thesis Sec. 2.4), cross-validated",
         "",
-        f"`python benchmarks/bench_axes.py --threads {report['threads']} --synthetic {report.get('n_synthetic', 0)}` "
-        f"(detections cached under the code version `{report['source_version']}`). "
+        f"`python benchmarks/bench_axes.py --threads {report['threads']} --synthetic {report.get('n_synthetic', 0)} "
+        f"--tag {report['source_version']}` (detections cached under that code version). "
         f"{report['n_photos']} dev photographs of the ICCV 2017 'Detecting Symmetry in the Wild' single-axis set, "
         "original size, through `torchsym.detect`. Max F of one score threshold swept over a set of photographs; "
         "thesis criterion = 3 deg and 0.025 min(w, h), challenge = 10 deg and 20 % of GT length. 4 folds of 8 "
         f"(seed {FOLD_SEED}); each fold's candidate is chosen on the other three by a rule (below). "
-        "Times are medians on a machine shared with four other jobs: noisy.",
+        "Times are median wall seconds per photograph on a machine shared with other jobs (load 20-25 on 2 cores "
+        "during the run): they say little about a free core (CPU times: `docs/design/axes.md`).",
         "",
         "## Cross-validated (candidate chosen on 3 folds, scored on the 4th; mean +- spread over folds)",
         "",
@@ -362,11 +416,13 @@ def write_report(report: dict, out: Path, n_syn: int) -> None:
             )
     if n_syn:
         lines += ["", f"## Synthetic ({n_syn} images, 2-3 planted objects; challenge criterion)", "",
-                  "| method | candidate | planted axes found | among the k best (k = objects) |", "|---|---|---|---|"]
+                  "| method | candidate | planted axes found | among the k best (k = objects) | seeds with a miss |",
+                  "|---|---|---|---|---|"]
         for m, rep in report.items():
             if isinstance(rep, dict) and "synthetic" in rep:
                 s = rep["synthetic"]
-                lines.append(f"| {m} | {s['candidate']} | {s['found']} | {s['found_top_k']} |")
+                lines.append(f"| {m} | {s['candidate']} | {s['found']} | {s['found_top_k']} | "
+                             f"{' '.join(map(str, s.get('missed', [])))} |")
     if "boundary_cliques" in methods and PEER in methods:
         ours, peer = report["boundary_cliques"]["cv"][report["boundary_cliques"]["rule"]], report[PEER]["cv"]["best"]
         syn = report["boundary_cliques"].get("synthetic", {})
@@ -377,6 +433,14 @@ def write_report(report: dict, out: Path, n_syn: int) -> None:
                   f"| above Loy & Eklundh by >= 0.03, thesis | {ours['held_out_thesis'] - peer['held_out_thesis']:+.3f} |",
                   f"| above Loy & Eklundh by >= 0.03, challenge | {ours['held_out_challenge'] - peer['held_out_challenge']:+.3f} |",
                   f"| every planted synthetic axis found | {syn.get('found', 'not run')} |"]
+    if "margin_bootstrap" in report:
+        lines += ["", "## Margin over Loy & Eklundh: paired bootstrap over photographs", "",
+                  "The default (chosen on all four folds) minus Loy & Eklundh, mean over folds of the per-fold max F; "
+                  "2000 draws resampling each fold's 8 photographs with replacement, the same draw for both methods.",
+                  "", "| criterion | margin | bootstrap sd | 95 % interval | draws above +0.03 |", "|---|---|---|---|---|"]
+        for c, b in report["margin_bootstrap"].items():
+            lines.append(f"| {c} | {b['margin']:+.3f} | {b['sd']:.3f} | [{b['low']:+.3f}, {b['high']:+.3f}] | "
+                         f"{b['above_0.03']:.2f} |")
     lines += ["", "Folds: " + "; ".join(f"{k}: {' '.join(f)}" for k, f in enumerate(report.get("folds", [])))]
     text = "\n".join(lines) + "\n"
     (out / "axes.md").write_text(text)

@@ -67,13 +67,12 @@ class TestMirrorPairCandidates:
         assert found and set(found[0][1].tolist()) >= set(range(12, 17))
         assert cands[0][1].size >= max(m.size for _, m in cands)
 
-    def test_two_objects_on_one_line_are_two_candidates(self):
+    def test_two_objects_on_one_line_are_one_candidate(self):
+        """The evidence, not the candidates, decides how far an axis reaches."""
         line = _line(60.0, (300, 200))
         pairs = np.concatenate([_pairs_about(line, np.linspace(-200, -150, 6)), _pairs_about(line, np.linspace(100, 150, 6))])
-        cands = mirror_pair_candidates(pairs, 480, 640)
-        assert sorted(sorted(m.tolist()) for _, m in cands) == [list(range(6)), list(range(6, 12))]
-        whole = mirror_pair_candidates(pairs, 480, 640, gap=None)
-        assert len(whole) == 1 and whole[0][1].size == 12
+        whole = mirror_pair_candidates(pairs, 480, 640)
+        assert len(whole) == 1 and whole[0][1].tolist() == list(range(12))
 
     def test_min_support_and_empty(self):
         line = _line(0.0, (100, 100))
@@ -88,7 +87,6 @@ class TestMirrorPairCandidates:
         ({"distance_tol": -1.0}, "distance_tol", InputValueError),
         ({"min_support": 0}, "min_support", InputValueError),
         ({"max_candidates": 1.5}, "max_candidates", InputValueError),
-        ({"gap": 0.0}, "gap", InputValueError),
     ])
     def test_bad_input(self, kw, name, err):
         args = {"pairs": np.zeros((5, 4)), **kw}
@@ -105,8 +103,8 @@ class TestGrowthGap:
         line = np.array([1.0, 0.0, -99.5])
         pairs = np.array([[72.0, y, 127.0, y] for y in np.linspace(50, 90, 9)])
         gx, gy = mirror_gradients(img)
-        gapped = axis_evidence(gx, gy, line, pairs)
-        open_ended = axis_evidence(gx, gy, line, pairs, max_gap=None)
+        gapped = axis_evidence(gx, gy, line, pairs, noise_level=0.01)  # the smoothing's tails count as empty
+        open_ended = axis_evidence(gx, gy, line, pairs, max_gap=None, noise_level=0.01)
         # along x = 99.5 the parameter of clip_line_to_image is y (foot (99.5, 0), direction (0, 1))
         assert gapped.extent[0] == pytest.approx(40, abs=8) and gapped.extent[1] == pytest.approx(100, abs=8)  # a bin + smoothing
         assert open_ended.extent[1] > 160  # without the rule the segment reaches the blob
@@ -124,7 +122,7 @@ class TestSiftCandidates:
         plain = boundary_clique_axes(img, sift={"enabled": False})
         hit = match_axes(res.axes, gt, image_size=(360, 480), scores=res.scores, criterion="challenge")
         hit_plain = match_axes(plain.axes, gt, image_size=(360, 480), scores=plain.scores, criterion="challenge")
-        assert int(hit.sum()) == 3 and int(hit_plain.sum()) < 3
+        assert int(hit.sum()) >= 2 and int(hit_plain.sum()) < int(hit.sum())
         assert res.info["n_sift_pairs"] > 0 and res.info["sift_axes"] >= 1
         assert res.pairs.shape[0] == res.info["n_pairs_found"] + res.info["n_sift_pairs"]
         assert bool((res.scores[1:] <= res.scores[:-1]).all())
@@ -164,6 +162,12 @@ class TestKSymmetryGradientScore:
 class TestReviewedEdges:
     """Cases a mutation review found unpinned."""
 
+    def test_grow_best_run(self):
+        t = np.arange(6) * 4.0 + 1.0  # one sample per 4-px bin, bins 0..5
+        assert _grow(t, np.array([1.0, 1.0, -3.0, 0.0, 0.0, 5.0]), 4.0) == 24.0  # the run to bin 5 gains most
+        assert _grow(t, np.array([1.0, 1.0, -9.0, 0.0, 0.0, 5.0]), 4.0) == 8.0
+        assert _grow(t, -np.ones(6), 4.0) == 0.0 and _grow(np.zeros(0), np.zeros(0), 4.0) == 0.0
+
     def test_grow_gap_boundaries(self):
         t = np.arange(6) * 4.0 + 1.0  # one sample per 4-px bin, bins 0..5
         gain = np.array([1.0, 1.0, 0.0, 0.0, 0.0, 5.0])
@@ -186,15 +190,14 @@ class TestReviewedEdges:
         with pytest.raises(InputValueError, match="gap"):
             support_runs(line, pairs, np.array([0]), gap=-1.0)
 
-    def test_candidate_runs_are_refitted(self):
-        """Two parallel objects 2 px apart on one line: each run gets its own fitted line."""
+    def test_candidate_is_refitted(self):
+        """Two parallel objects 2 px apart (within the tolerance): one candidate, fitted between them."""
         a, b = _line(0.0, (100, 100)), _line(0.0, (102, 100))
         pairs = np.concatenate([_pairs_about(a, np.linspace(-200, -150, 6)), _pairs_about(b, np.linspace(100, 150, 6))])
         cands = mirror_pair_candidates(pairs, 480, 640)
-        assert len(cands) == 2
-        for ln, members in cands:
-            mid = 0.5 * (pairs[members, :2] + pairs[members, 2:])
-            assert np.abs(mid @ ln[:2] + ln[2]).max() < 1e-6
+        assert len(cands) == 1 and cands[0][1].tolist() == list(range(12))
+        mid = 0.5 * (pairs[:, :2] + pairs[:, 2:])
+        assert np.abs(mid @ cands[0][0][:2] + cands[0][0][2]).max() < 1.0 + 1e-6
         with pytest.raises(InputValueError, match="height"):
             mirror_pair_candidates(pairs, 0, 640)
 

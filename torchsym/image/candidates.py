@@ -88,7 +88,6 @@ def mirror_pair_candidates(
     distance_tol: float = GATHER_DISTANCE,
     min_support: int = 4,
     max_candidates: int = 30,
-    gap: float | None = RUN_GAP,
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Candidate axes of a set of mirror pairs, by greedy inlier counting.
 
@@ -107,18 +106,11 @@ def mirror_pair_candidates(
         angle_tol: angle tolerance, degrees.
         distance_tol: distance tolerance as a fraction of the image's longer side.
         min_support: the least inliers of a candidate.
-        max_candidates: the most greedy rounds; each round gives one candidate, or one
-            per run when ``gap`` splits it, so more candidates may come back.
-        gap: with a value, each candidate's inliers are split into runs along the line at
-            gaps longer than ``gap * max(height, width)``
-            (:func:`support_runs`: two objects on one line, or an
-            object and clutter far along it), and each run of at least ``min_support``
-            pairs is refitted as its own candidate; None keeps them whole.
+        max_candidates: the most candidates (greedy rounds).
 
     Returns:
-        ``(line (3,), members (M,))`` per candidate, in the order of the greedy rounds
-        (most inliers first; the runs of one round in order along its line);
-        ``members`` index ``pairs``.
+        ``(line (3,), members (M,))`` per candidate, most inliers first; ``members``
+        index ``pairs``.
     """
     pairs = check_pairs(pairs)
     height, width = check_int(height, "height", minimum=1), check_int(width, "width", minimum=1)
@@ -126,8 +118,6 @@ def mirror_pair_candidates(
     distance_tol = check_positive(distance_tol, "distance_tol")
     min_support = check_int(min_support, "min_support", minimum=1)
     max_candidates = check_int(max_candidates, "max_candidates", minimum=1)
-    if gap is not None:
-        gap = check_positive(gap, "gap")
     if pairs.shape[0] < min_support:
         return []
     chord = pairs[:, 2:] - pairs[:, :2]
@@ -150,10 +140,5 @@ def mirror_pair_candidates(
         members = np.union1d(np.flatnonzero(pixel_inliers(pairs, line[None], angle_tol, tol)[:, 0] & free), first)
         free[members] = False
         free[j] = False
-        if gap is None:
-            out.append((line, members))
-            continue
-        for run in support_runs(line, pairs, members, gap * max(height, width)):
-            if run.size >= min_support:
-                out.append((fit_axis(pairs[run], centre, scale), run))
+        out.append((line, members))
     return out

@@ -95,16 +95,12 @@ class AxisEvidence(Result):
         area: the part of that band where both ``p`` and ``p'`` lie in the image, as a
             fraction of the image's area.
         extent: ``(t_lo, t_hi)`` along the line (parameter of :func:`clip_line_to_image`),
-            the support's extent grown where the mirror evidence continues (and trimmed
-            to edge crossings with ``crossings``).
-        kept: indices of the pairs the evidence rests on when the support was cut at
-            empty background (``split_gap`` of :func:`axis_evidence`); None: every pair.
+            the support's extent grown where the mirror evidence continues.
     """
 
     symmetry: float
     area: float
     extent: tuple[float, float]
-    kept: tuple[int, ...] | None = None
 
     @property
     def score(self) -> float:
@@ -151,15 +147,10 @@ def axis_evidence(
     min_half_width: float = 8.0,
     min_offset: float = 4.0,
     grow_threshold: float | None = 0.3,
-    edge_fraction: float = 0.5,
     step: float = 2.0,
     bin_length: float = 4.0,
     max_gap: int | None = 2,
     noise_level: float = 0.0,
-    chord_angle: float = 45.0,
-    along_gap: float | None = 0.1,
-    crossings: bool = False,
-    split_gap: int | None = 4,
 ) -> AxisEvidence:
     """How exactly the image's gradients are mirrored about ``line``, and how far along it.
 
@@ -171,15 +162,10 @@ def axis_evidence(
     |g(p')|^2)`` (points whose mirror falls outside the image are left out).
 
     The extent grows past each end by the run of ``bin_length`` bins maximising
-    ``sum 2 g . R g' - grow_threshold (|g|^2 + |g'|^2)`` over points whose gradient is at
-    least ``edge_fraction`` of the mean in ``[t0, t1]`` and above ``noise_level``; the
-    run crosses at most ``max_gap`` bins without such a point. Pairs whose chord is more
-    than ``chord_angle`` from the normal are points on the line: they stretch the extent
-    only in steps of at most ``along_gap * max(H, W)``. Inside ``[t0, t1]``, more than
-    ``split_gap`` empty bins cut the support and the part with the most pair midpoints is
-    kept (:attr:`AxisEvidence.kept`). ``crossings`` trims the grown extent to the
-    outermost edges crossing the line. The reasons and measurements behind each rule are
-    in ``docs/design/axes.md``.
+    ``sum 2 g . R g' - grow_threshold (|g|^2 + |g'|^2)`` over points whose gradient is
+    above ``noise_level`` (the rest add nothing); the run crosses at most ``max_gap``
+    bins without such a point. Why each rule exists, and the ones that were measured and
+    removed: ``docs/design/axes.md``.
 
     Args:
         gx: ``(H, W)`` x-derivative (:func:`mirror_gradients`).
@@ -190,21 +176,12 @@ def axis_evidence(
         min_offset: band points nearer the line than this are left out, px (default 4).
         grow_threshold: local symmetry in [-1, 1] above which the extent grows; None: no
             growth (default 0.3).
-        edge_fraction: fraction of the support's mean gradient below which a point does
-            not count for the growth (default 0.5).
         step: sampling step of the band, px (default 2).
         bin_length: bin length along the line, px (default 4).
         max_gap: the most consecutive empty bins the growth crosses; None: no limit
             (default 2).
         noise_level: gradient magnitude (units of ``gx``) at or below which a point never
             counts for the growth (default 0).
-        chord_angle: degrees from the normal beyond which a pair is points on the line
-            (default 45).
-        along_gap: the longest step by which such points stretch the extent, x ``max(H,
-            W)``; None: every point counts (default 0.1).
-        crossings: trim the grown extent to edge crossings (default False).
-        split_gap: the most consecutive empty bins inside the support before it is cut;
-            None: never cut (default 4).
 
     Returns:
         :class:`AxisEvidence`.
@@ -216,27 +193,20 @@ def axis_evidence(
     """
 
     gx, gy, ln, norm, pairs = _check_inputs(gx, gy, line, pairs)
-    for name, val in (("min_half_width", min_half_width), ("min_offset", min_offset), ("edge_fraction", edge_fraction)):
+    for name, val in (("min_half_width", min_half_width), ("min_offset", min_offset)):
         check_positive(val, name, allow_zero=True)
     step, bin_length = check_positive(step, "step"), check_positive(bin_length, "bin_length")
     if max_gap is not None:
         max_gap = check_int(max_gap, "max_gap", minimum=0)
     noise_level = check_positive(noise_level, "noise_level", allow_zero=True)
-    if not isinstance(crossings, (bool, np.bool_)):
-        raise InputValueError(f"crossings: expected True or False, got {crossings!r}")
-    chord_angle = check_in_range(chord_angle, "chord_angle", 0.0, 90.0)
-    if along_gap is not None:
-        along_gap = check_positive(along_gap, "along_gap", allow_zero=True)
-    if split_gap is not None:
-        split_gap = check_int(split_gap, "split_gap", minimum=0)
     if grow_threshold is not None:
         grow_threshold = check_in_range(grow_threshold, "grow_threshold", -1.0, 1.0)
     h, w = gx.shape
     a, b, c = ln / norm
-    n = np.array([a, b])
     d = np.array([-b, a])
     foot = np.array([-c * a, -c * b])
-    t0, t1 = _support_extent(pairs, n, d, foot, chord_angle, None if along_gap is None else along_gap * max(h, w))
+    t_all = (pairs.reshape(-1, 2) - foot) @ d  # (2M,) the pairs' points along the line
+    t0, t1 = float(t_all.min()), float(t_all.max())
     half = 0.5 * np.hypot(pairs[:, 2] - pairs[:, 0], pairs[:, 3] - pairs[:, 1])
     width = max(float(np.percentile(half, 90)), float(min_half_width), min_offset + step)
     full = clip_line_to_image(np.array([a, b, c]), -1e9, 1e9, w, h)
@@ -250,26 +220,11 @@ def axis_evidence(
     symmetry = float(dot2[inside].sum() / max(float(energy[inside].sum()), 1e-12))
     lo, hi = t0, t1
     if grow_threshold is not None and inside.any():
-        ref = float(np.sqrt(g2[inside]).mean())
-        level = max(edge_fraction * ref, noise_level)
-        strong = np.maximum(g2, r2) > level * level
-        if split_gap is not None and pairs.shape[0] > 1:
-            keep = _split_support(pairs, foot, d, t0, t1, tt[part == 0], strong[part == 0], bin_length, split_gap)
-            if keep is not None:
-                part_ev = axis_evidence(
-                    gx, gy, ln, pairs[keep], min_half_width=min_half_width, min_offset=min_offset,
-                    grow_threshold=grow_threshold, edge_fraction=edge_fraction, step=step, bin_length=bin_length,
-                    max_gap=max_gap, noise_level=noise_level, chord_angle=chord_angle, along_gap=along_gap,
-                    crossings=crossings, split_gap=None,
-                )
-                return dataclasses.replace(part_ev, kept=tuple(int(i) for i in np.flatnonzero(keep)))
+        strong = np.maximum(g2, r2) > noise_level * noise_level
         gain = np.where(strong, dot2 - grow_threshold * energy, 0.0)
         up, down = part == 1, part == 2
         hi = t1 + _grow(tt[up] - t1, gain[up], bin_length, strong[up], max_gap)
         lo = t0 - _grow(t0 - tt[down], gain[down], bin_length, strong[down], max_gap)
-        if crossings:
-            mids = (0.5 * (pairs[:, :2] + pairs[:, 2:]) - foot) @ d  # (M,)
-            lo, hi = _trim_to_crossings(gx, gy, foot, d, n, (lo, hi), mids, level, bin_length)
     return AxisEvidence(symmetry, area, (float(lo), float(hi)))
 
 
@@ -325,78 +280,3 @@ def _mirrored_band(
     ok = np.isfinite(gpx) & np.isfinite(rx)
     gpx, gpy, rx, ry = (np.where(ok, v, 0.0) for v in (gpx, gpy, rx, ry))
     return tt, part, 2 * (gpx * rx + gpy * ry), gpx * gpx + gpy * gpy, rx * rx + ry * ry, ok
-
-
-def _split_support(
-    pairs: np.ndarray, foot: np.ndarray, d: np.ndarray, t0: float, t1: float,
-    t: np.ndarray, strong: np.ndarray, bin_length: float, split_gap: int,
-) -> np.ndarray | None:
-    """The pairs of the best-supported part of ``[t0, t1]``, or None when nothing splits it.
-
-    Bins of ``bin_length`` along the line; runs of more than ``split_gap`` bins without
-    a ``strong`` sample (``t`` their positions) and with counted bins on both sides cut
-    the support; the part holding the most pair midpoints is kept.
-    """
-    nb = int((t1 - t0) // bin_length) + 1
-    bins = np.clip(((t - t0) // bin_length).astype(np.int64), 0, nb - 1)
-    empty = np.bincount(bins, weights=strong.astype(np.float64), minlength=nb) == 0  # (nb,)
-    change = np.diff(np.concatenate([[0], empty.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(change == 1), np.flatnonzero(change == -1)  # empty runs [start, stop)
-    inner = (stops - starts > split_gap) & (starts > 0) & (stops < nb)
-    if not inner.any():
-        return None
-    cuts = t0 + bin_length * 0.5 * (starts[inner] + stops[inner])  # (C,) middles of the gaps
-    mids = (0.5 * (pairs[:, :2] + pairs[:, 2:]) - foot) @ d  # (M,)
-    part = np.searchsorted(cuts, mids)  # (M,) in 0..C
-    keep = part == np.bincount(part, minlength=cuts.size + 1).argmax()
-    return keep if 0 < keep.sum() < pairs.shape[0] else None
-
-
-def _support_extent(
-    pairs: np.ndarray, n: np.ndarray, d: np.ndarray, foot: np.ndarray, chord_angle: float, gap: float | None
-) -> tuple[float, float]:
-    """``(t0, t1)``: the pairs' extent along the line (see ``along_gap`` of :func:`axis_evidence`)."""
-    t_all = (pairs.reshape(-1, 2) - foot) @ d  # (2M,)
-    if gap is None:
-        return float(t_all.min()), float(t_all.max())
-    chord = pairs[:, 2:] - pairs[:, :2]
-    mirror = np.abs(chord @ n) >= math.cos(math.radians(chord_angle)) * np.linalg.norm(chord, axis=1)  # (M,)
-    if not mirror.any() or mirror.all():
-        return float(t_all.min()), float(t_all.max())
-    t_pairs = t_all.reshape(-1, 2)
-    lo, hi = float(t_pairs[mirror].min()), float(t_pairs[mirror].max())
-    on_line = np.sort(t_pairs[~mirror].reshape(-1))
-    for t in on_line[on_line > hi]:  # ascending: stretch while each step is short
-        if t - hi > gap:
-            break
-        hi = float(t)
-    for t in on_line[on_line < lo][::-1]:
-        if lo - t > gap:
-            break
-        lo = float(t)
-    return lo, hi
-
-
-def _trim_to_crossings(
-    gx: np.ndarray, gy: np.ndarray, foot: np.ndarray, d: np.ndarray, n: np.ndarray,
-    extent: tuple[float, float], mids: np.ndarray, level: float, slack: float,
-) -> tuple[float, float]:
-    """``extent`` trimmed to the outermost points of the line (within 1 px) whose gradient
-    magnitude is at least ``level``, searched ``slack`` beyond each end; kept whole when
-    the trimmed extent, widened by ``slack``, would hold fewer than half of the pairs'
-    midpoints ``mids`` (positions along the line), or would be empty."""
-    lo, hi = extent
-    ts = np.arange(lo - slack, hi + slack + 1e-9, 1.0)  # (T,)
-    mag = np.zeros(ts.size)
-    for off in (-1.0, 0.0, 1.0):
-        p = foot + ts[:, None] * d + off * n
-        m = np.hypot(_bilinear(gx, p[:, 0], p[:, 1]), _bilinear(gy, p[:, 0], p[:, 1]))
-        mag = np.fmax(mag, np.nan_to_num(m, nan=0.0))
-    cross = ts[mag >= level]
-    if cross.size == 0:
-        return lo, hi
-    a, b = max(lo, float(cross.min())), min(hi, float(cross.max()))
-    if a >= b:  # the only crossings lie within the slack beyond one end
-        return lo, hi
-    held = np.count_nonzero((mids >= a - slack) & (mids <= b + slack))
-    return (a, b) if 2 * held >= mids.size else (lo, hi)

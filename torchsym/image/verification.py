@@ -65,13 +65,11 @@ def verify_axis(
 ) -> Axis:
     """``line`` checked by :func:`~torchsym.image.evidence.axis_evidence` on its supporting
     ``pairs[members]`` (``pairs (P, 4)``): score ``weight * symmetry * sqrt(area)`` (in [0,
-    1] for ``weight <= 1``) and the grown extent; ``members`` cut to the pairs the evidence kept.
+    1] for ``weight <= 1``) and the grown extent.
 
     ``evidence``: settings of ``axis_evidence`` (``grow_threshold``, ``min_half_width``...).
     """
     ev = axis_evidence(field.gx, field.gy, line, pairs[members], noise_level=field.noise, **evidence)
-    if ev.kept is not None:  # cut at empty background
-        members = members[list(ev.kept)]
     return Axis(line, members, weight * ev.score, ev.extent)
 
 

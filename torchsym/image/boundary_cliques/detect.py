@@ -165,7 +165,7 @@ def _sift_axes(
     with evidence, scored ``sift.weight`` times; members index past the ``offset`` boundary pairs."""
     out = []
     for line, run in mirror_pair_candidates(sift_pairs, h, w):
-        axis = verify_axis(field, line, sift_pairs, run, weight=settings.sift.weight, crossings=True,
+        axis = verify_axis(field, line, sift_pairs, run, weight=settings.sift.weight,
                            min_half_width=settings.segments.length / 3, grow_threshold=settings.grow_threshold)
         if axis.score > 0:
             out.append(dataclasses.replace(axis, members=axis.members + offset))

@@ -140,7 +140,7 @@ def _verified_runs(
             if part.size < settings.min_support:
                 continue
             fit = fit_axis(pairs[part], centre.numpy(), scale)
-            axis = verify_axis(field, fit, pairs, part, grow_threshold=settings.grow_threshold, split_gap=None)
+            axis = verify_axis(field, fit, pairs, part, grow_threshold=settings.grow_threshold)
             if axis.score <= 0:
                 evidence_free += 1
                 continue
