@@ -22,7 +22,7 @@ __all__ = [
 class CandidateSettings(Settings):
     """Candidate mirror pairs: mirrored-SIFT matches of SIFT keypoints (Sec. 3.2.2, "Initialization")."""
 
-    num_features: int = setting(1000, "the most SIFT keypoints", low=2)
+    num_features: int = setting(2000, "the most SIFT keypoints", low=2)
     max_distance: float = setting(
         0.3, "a pair's descriptor distance |d_i - m_j| below this (unit RootSIFT descriptors)", low=0.0, high=2.0
     )
