@@ -9,7 +9,8 @@ import torch
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image.symmslic import SymmSlic, SymmSlicSettings, mirror_pixel_pairs, symm_slic
 from torchsym.image.symmslic.settings import MirrorPairSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, slic_iterations
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, slic_iterations
+from torchsym.image.symmslic.solver import slic_grid
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.metrics.superpixels import (
     achievable_segmentation_accuracy,
@@ -134,6 +135,29 @@ class TestSymmSlic:
     def test_pairs_empty_on_blank(self):
         p = mirror_pixel_pairs(torch.zeros(3, 64, 64), MirrorPairSettings(), torch.Generator().manual_seed(0))
         assert len(p) == 0 and p.normals.shape == (0, 2)
+
+
+class TestSlicSteps:
+    def test_connectivity_small_piece_joins_raster_neighbour(self):
+        """Achanta's rule: a small piece joins, whole, the piece met before it in a raster
+        scan: of its first pixel's 4-neighbours in pieces met earlier, the last of left, up,
+        right, down (here down, over up)."""
+        labels = np.array([[0, 0, 0, 0], [1, 2, 2, 0], [1, 1, 1, 0]])
+        out, origin = enforce_connectivity(labels, 3, np.ones(3, dtype=bool))
+        a, b = out[0, 0], out[1, 0]
+        assert a != b
+        np.testing.assert_array_equal(out, [[a, a, a, a], [b, b, b, a], [b, b, b, a]])
+        assert origin[a] == 0 and origin[b] == 1
+
+    def test_connectivity_pieces_of_one_label_split(self):
+        labels = np.array([[0, 0, 1, 1, 0, 0]] * 3)
+        out, origin = enforce_connectivity(labels, 3, np.ones(2, dtype=bool))
+        assert len(np.unique(out)) == 3 and sorted(origin.tolist()) == [0, 0, 1]
+
+    def test_grid(self):
+        g = slic_grid(321, 481, 18)
+        assert len(g) == 18 * 27 and g[0].tolist() == [9.0, 9.0]
+        assert float(g[:, 0].max()) <= 480 and float(g[:, 1].max()) <= 320
 
 
 class TestSuperpixelMetrics:

@@ -70,32 +70,55 @@ def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: to
     return region
 
 
+def slic_grid(h: int, w: int, step: int) -> torch.Tensor:
+    """SLIC's seed grid ``(G, 2)`` float64 ``(x, y)``: ``round(W / S)`` columns and
+    ``round(H / S)`` rows from ``S // 2``, the remainder spread over the strips (as
+    Achanta et al.'s code)."""
+
+    def axis(n: int) -> np.ndarray:
+        strips = max(1, int(0.5 + n / step))
+        per = int((n - step * strips) / strips)  # truncated towards 0
+        pos = np.arange(strips) * (step + per) + step // 2
+        return pos[pos <= n - 1]
+
+    ys, xs = np.meshgrid(axis(h), axis(w), indexing="ij")
+    return torch.from_numpy(np.stack([xs.reshape(-1), ys.reshape(-1)], 1).astype(np.float64))
+
+
+def _lowest(grad: torch.Tensor, cand: torch.Tensor, mir: torch.Tensor | None = None) -> torch.Tensor:
+    """Index into the 9 candidates ``cand (N, 9, 2)`` of the lowest gradient (summed
+    with that at the mirror points ``mir`` when given)."""
+    h, w = grad.shape
+
+    def at(p: torch.Tensor) -> torch.Tensor:
+        xi, yi = p[..., 0].round().long().clamp(0, w - 1), p[..., 1].round().long().clamp(0, h - 1)
+        return grad[yi, xi]
+
+    return (at(cand) + (at(mir) if mir is not None else 0.0)).argmin(1)
+
+
 def _init_centres(
     lab: torch.Tensor, grad: torch.Tensor, region: np.ndarray, normals: torch.Tensor, offsets: torch.Tensor, step: int
 ) -> Centres:
-    """SLIC's grid; grid points in an axis's region on its left side become pairs with
-    their reflections (moved within 3 x 3 to the lowest gradient of the pair)."""
+    """SLIC's grid, each seed moved within 3 x 3 to the lowest gradient; grid points in an
+    axis's region on its left side become pairs with their reflections (moved to the
+    lowest gradient of the pair)."""
     _, h, w = lab.shape
-    ys, xs = np.meshgrid(np.arange(step / 2, h, step), np.arange(step / 2, w, step), indexing="ij")
-    g = torch.from_numpy(np.stack([xs.reshape(-1), ys.reshape(-1)], 1))  # (G, 2)
-    a = torch.from_numpy(region[g[:, 1].long().clamp(0, h - 1), g[:, 0].long().clamp(0, w - 1)])
+    g = slic_grid(h, w, step)
+    a = torch.from_numpy(region[g[:, 1].long(), g[:, 0].long()])
     side = torch.zeros(len(g), dtype=g.dtype)
     if len(normals):
         side = torch.where(a >= 0, (g * normals[a.clamp(min=0)]).sum(1) + offsets[a.clamp(min=0)], side)
+    d = torch.tensor([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=g.dtype)
     plain = g[a < 0]
+    plain = (plain[:, None] + d[None])[torch.arange(len(plain)), _lowest(grad, plain[:, None] + d[None])]
+    plain[:, 0].clamp_(0, w - 1)
+    plain[:, 1].clamp_(0, h - 1)
     lefts, axes = g[(a >= 0) & (side <= 0)], a[(a >= 0) & (side <= 0)]
     if len(lefts):
-        d = torch.tensor([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=g.dtype)
         cand = lefts[:, None] + d[None]  # (L, 9, 2)
-        n, b = normals[axes][:, None], offsets[axes][:, None]
-        mir = reflect_2d(cand, n, b)
-
-        def at(p):
-            xi, yi = p[..., 0].round().long().clamp(0, w - 1), p[..., 1].round().long().clamp(0, h - 1)
-            return grad[yi, xi]
-
-        best = (at(cand) + at(mir)).argmin(1)
-        lefts = cand[torch.arange(len(lefts)), best]
+        mir = reflect_2d(cand, normals[axes][:, None], offsets[axes][:, None])
+        lefts = cand[torch.arange(len(lefts)), _lowest(grad, cand, mir)]
         rights = reflect_2d(lefts, normals[axes], offsets[axes])
         inside = (rights[:, 0] >= 0) & (rights[:, 0] <= w - 1) & (rights[:, 1] >= 0) & (rights[:, 1] <= h - 1)
         plain = torch.cat([plain, lefts[~inside]])
@@ -185,8 +208,8 @@ def symm_slic(
     timings["pairs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lab = kornia.color.rgb_to_lab(rgb[None])[0] * LAB_SCALE[:, None, None]  # (3, H, W), OpenCV's 8-bit Lab scale
-    gy, gx = np.gradient(lab[0].numpy())
-    grad = torch.from_numpy(np.hypot(gx, gy))
+    gy, gx = np.gradient(lab.numpy(), axis=(1, 2))
+    grad = torch.from_numpy(np.sqrt((gx**2 + gy**2).sum(0)))  # (H, W) Lab gradient magnitude
     region = symmetric_region(found, normals, offsets, h, w)
     step = max(1, int(round(math.sqrt(h * w / settings.n_superpixels))))
     c = _init_centres(lab, grad, region, normals, offsets, step)
