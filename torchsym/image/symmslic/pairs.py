@@ -82,12 +82,11 @@ def curve_samples(chains: list[np.ndarray], *, length: float, n_samples: int, st
 
 def _matches(
     points: torch.Tensor, grads: torch.Tensor, p: torch.Tensor, q: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+) -> tuple[torch.Tensor, torch.Tensor]:
     """The edge samples ``points (N, 2)`` within the bounding box of the axis's pairs
     ``p, q``, reflected into it, whose reflection lands within 2.5 px of an edge sample
-    with a mirrored gradient (cosine > 0.8): ``(matched (N,) bool, inside (N,) bool,
-    partner (N,) int64)``, ``inside`` the samples considered, ``partner`` the nearest
-    sample to each reflection (-1 outside)."""
+    with a mirrored gradient (cosine > 0.8): ``(matched (N,) bool, inside (N,) bool)``,
+    ``inside`` the samples considered."""
     from scipy.spatial import cKDTree
 
     both = torch.cat([p, q])
@@ -95,18 +94,15 @@ def _matches(
     refl_all = points - 2.0 * (points @ normal + offset)[:, None] * normal
     inside = ((points >= lo) & (points <= hi)).all(1) & ((refl_all >= lo) & (refl_all <= hi)).all(1)
     out = torch.zeros(len(points), dtype=torch.bool)
-    partner = torch.full((len(points),), -1, dtype=torch.int64)
     if int(inside.sum()) < 2:
-        return out, inside, partner
-    idx = torch.nonzero(inside)[:, 0]
+        return out, inside
     pts, gr, refl = points[inside], grads[inside], refl_all[inside]
     dist, j = cKDTree(pts.numpy()).query(refl.numpy())
     j = torch.from_numpy(j)
     g_m = gr - 2.0 * (gr @ normal)[:, None] * normal
     consistent = (g_m * gr[j]).sum(1) > 0.8
     out[inside] = (torch.from_numpy(dist) < 2.5) & consistent
-    partner[inside] = idx[j]
-    return out, inside, partner
+    return out, inside
 
 
 def _support(matched: torch.Tensor, inside: torch.Tensor) -> float:
@@ -237,18 +233,15 @@ def mirror_pixel_pairs(
         chord = torch.where((chord @ peak < 0)[:, None], -chord, chord)
         normal = F.normalize(chord.mean(0), dim=0)  # the axis refitted to its pairs
         offset = -(0.5 * (p + q) @ normal).median()
-        m, _, _ = _matches(x.double(), g.double(), p, q, normal, offset)
+        m, _ = _matches(x.double(), g.double(), p, q, normal, offset)
         if int(m.sum()) >= 3:  # the axis refined on the edges that have a mirror edge
             normal, offset = refine_axis_photometric(gray, x.double()[m], g.double()[m], normal, offset)
-        m, inside, partner = _matches(x.double(), g.double(), p, q, normal, offset)
+        m, inside = _matches(x.double(), g.double(), p, q, normal, offset)
         if _support(m, inside) < s.min_support:
             continue
-        frame = torch.tensor([[0.0, 0.0], [w - 1.0, h - 1.0]], dtype=torch.float64)
-        m, _, partner = _matches(x.double(), g.double(), frame[:1], frame[1:], normal, offset)
-        p, q = x.double()[m], x.double()[partner[m]]  # L and R: every edge sample with a mirror edge
         side = p @ normal + offset
-        p, q = p[side < 0], q[side < 0]
-        lft, rgt = p, q
+        lft = torch.where((side < 0)[:, None], p, q)
+        rgt = torch.where((side < 0)[:, None], q, p)
         k = len(normals)
         left.append(lft)
         right.append(rgt)
