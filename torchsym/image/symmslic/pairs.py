@@ -81,12 +81,18 @@ def curve_samples(chains: list[np.ndarray], *, length: float, n_samples: int, st
 
 
 def _matches(
-    points: torch.Tensor, grads: torch.Tensor, p: torch.Tensor, q: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor
+    points: torch.Tensor,
+    grads: torch.Tensor,
+    p: torch.Tensor,
+    q: torch.Tensor,
+    normal: torch.Tensor,
+    offset: torch.Tensor,
+    radius: float = 2.5,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """The edge samples ``points (N, 2)`` within the bounding box of the axis's pairs
-    ``p, q``, reflected into it, whose reflection lands within 2.5 px of an edge sample
-    with a mirrored gradient (cosine > 0.8): ``(matched (N,) bool, inside (N,) bool)``,
-    ``inside`` the samples considered."""
+    """The edge points ``points (N, 2)`` (unit gradients ``grads``) within the bounding box
+    of the axis's pairs ``p, q``, reflected into it, whose reflection lands within
+    ``radius`` px of an edge point with a mirrored gradient (cosine > 0.8):
+    ``(matched (N,) bool, inside (N,) bool)``, ``inside`` the points considered."""
     from scipy.spatial import cKDTree
 
     both = torch.cat([p, q])
@@ -101,13 +107,13 @@ def _matches(
     j = torch.from_numpy(j)
     g_m = gr - 2.0 * (gr @ normal)[:, None] * normal
     consistent = (g_m * gr[j]).sum(1) > 0.8
-    out[inside] = (torch.from_numpy(dist) < 2.5) & consistent
+    out[inside] = (torch.from_numpy(dist) < radius) & consistent
     return out, inside
 
 
 def _support(matched: torch.Tensor, inside: torch.Tensor) -> float:
-    """Share of the edge samples considered (see :func:`_matches`) that have a mirror
-    edge: near 1 on a symmetric object, a few percent for edges that only chance pairs up."""
+    """Share of the edge pixels considered (see :func:`_matches`) that have a mirror
+    edge: high on a symmetric object, a few percent for edges that only chance pairs up."""
     return float(matched.sum()) / int(inside.sum()) if int(inside.sum()) >= 2 else 0.0
 
 
@@ -194,6 +200,8 @@ def mirror_pixel_pairs(
     gray = torch.from_numpy(image.float().mean(0).cpu().numpy()).double()  # (H, W)
     grad = F.normalize(torch.from_numpy(np.stack([gx, gy], -1)).float(), dim=-1)  # (H, W, 2) unit gradients
     g = grad[x[:, 1].round().long().clamp(0, h - 1), x[:, 0].round().long().clamp(0, w - 1)]  # (N, 2)
+    edges = torch.from_numpy(np.concatenate([np.asarray(c, dtype=np.float64) for c in chains]))  # (E, 2) every chain pixel
+    edge_grads = grad[edges[:, 1].round().long().clamp(0, h - 1), edges[:, 0].round().long().clamp(0, w - 1)].double()
     hh = min(s.n_partners, n - 1)
     i = torch.arange(n).repeat_interleave(hh)  # (N h,)
     j = (i + 1 + torch.randint(0, n - 1, (n * hh,), generator=generator)) % n  # never i
@@ -236,7 +244,7 @@ def mirror_pixel_pairs(
         m, _ = _matches(x.double(), g.double(), p, q, normal, offset)
         if int(m.sum()) >= 3:  # the axis refined on the edges that have a mirror edge
             normal, offset = refine_axis_photometric(gray, x.double()[m], g.double()[m], normal, offset)
-        m, inside = _matches(x.double(), g.double(), p, q, normal, offset)
+        m, inside = _matches(edges, edge_grads, p, q, normal, offset, radius=1.5)
         if _support(m, inside) < s.min_support:
             continue
         side = p @ normal + offset
