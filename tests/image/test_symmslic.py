@@ -232,3 +232,23 @@ def test_refine_axis_photometric_recovers_the_axis():
     normal, offset = refine_axis_photometric(gray, pts, grads, n0, -(n0 @ centre) + 3.0)
     assert abs(float(normal @ axis[:2])) > math.cos(math.radians(0.05))
     assert abs(float(normal @ centre + offset)) < 0.3
+
+
+def test_symmetric_region_grows_through_mirrored_colour():
+    """On an image mirrored about x = 99.5, the hull of a few central pairs grows to the
+    whole image, and stays the hull with ``min_corr`` 1; a flat image does not grow."""
+    from torchsym.image.symmslic.pairs import MirrorPixelPairs
+    from torchsym.image.symmslic.solver import symmetric_region
+
+    half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(0)), size=(80, 100), mode="bilinear")[0]
+    lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200), mirrored
+    n, b = torch.tensor([[1.0, 0.0]], dtype=torch.float64), torch.tensor([-99.5], dtype=torch.float64)
+    left = torch.tensor([[90.0, 30.0], [90.0, 50.0], [95.0, 40.0]], dtype=torch.float64)
+    right = left * torch.tensor([-1.0, 1.0], dtype=torch.float64) + torch.tensor([199.0, 0.0], dtype=torch.float64)
+    pairs = MirrorPixelPairs(left, right, torch.zeros(3, dtype=torch.int64), n, b, torch.ones(1, dtype=torch.float64))
+    hull = symmetric_region(pairs, n, b, 80, 200)
+    grown = symmetric_region(pairs, n, b, 80, 200, lab, 0.8)
+    flat = symmetric_region(pairs, n, b, 80, 200, np.full_like(lab, 50.0), 0.8)
+    assert 0 < (hull >= 0).mean() < 0.05
+    assert (grown >= 0).mean() > 0.99
+    np.testing.assert_array_equal(flat, hull)

@@ -41,5 +41,11 @@ class SymmSlicSettings(Settings):
     )
     max_iters: int = setting(10, "k-means iterations", low=1)
     pairs: MirrorPairSettings = group(MirrorPairSettings)
+    min_mirror_correlation: float = setting(
+        0.8,
+        "the symmetric region grows from the hull of an axis's pairs through pixels whose neighbourhood (Gaussian 4 px) correlates with the mirror image's at least this much; 1: the hull only",
+        low=-1.0,
+        high=1.0,
+    )
     min_size_share: float = setting(0.25, "fragments smaller than this share of the mean superpixel are merged", low=0.0, high=1.0)
     seed: int = setting(0, "seed of the module's generator", low=0)
