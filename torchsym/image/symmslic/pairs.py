@@ -8,9 +8,10 @@ isometric involution; the curves are compared in both directions of travel and t
 better kept, as a chain's direction carries no meaning). Each edge pixel is paired with
 ``h`` random others (the thesis's probability argument); each pair votes for its axis
 ``(phi, rho)`` with weight ``exp(-(o + o') / 4 sigma^2)``; the dominant peaks of the vote
-are the symmetry axes, each kept when enough of the edges around its pairs have a mirror
-edge (the support, which separates an object's symmetry from pairs that chance lines
-up). The gradient consistency of Eq. 4.5, which the thesis applies to
+are the symmetry axes, each refitted to its pairs, refined on the image
+(:func:`refine_axis_photometric`) and kept when enough of the edge pixels around its
+pairs have a mirror edge pixel (the support, which separates an object's symmetry from
+pairs that chance lines up). The gradient consistency of Eq. 4.5, which the thesis applies to
 the pairs of each peak, is applied before the vote: a pair it rejects could not be kept,
 and without its vote the peaks stand out (and the curve costs are computed for a fifth
 of the random pairs).
