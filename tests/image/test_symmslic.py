@@ -9,7 +9,8 @@ import torch
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image.symmslic import SymmSlic, SymmSlicSettings, mirror_pixel_pairs, symm_slic
 from torchsym.image.symmslic.settings import MirrorPairSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, slic_iterations
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, slic_iterations
+from torchsym.image.symmslic.solver import slic_grid
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.metrics.superpixels import (
     achievable_segmentation_accuracy,
@@ -136,6 +137,29 @@ class TestSymmSlic:
         assert len(p) == 0 and p.normals.shape == (0, 2)
 
 
+class TestSlicSteps:
+    def test_connectivity_small_piece_joins_raster_neighbour(self):
+        """Achanta's rule: a small piece joins, whole, the piece met before it in a raster
+        scan: of its first pixel's 4-neighbours in pieces met earlier, the last of left, up,
+        right, down (here down, over up)."""
+        labels = np.array([[0, 0, 0, 0], [1, 2, 2, 0], [1, 1, 1, 0]])
+        out, origin = enforce_connectivity(labels, 3, np.ones(3, dtype=bool))
+        a, b = out[0, 0], out[1, 0]
+        assert a != b
+        np.testing.assert_array_equal(out, [[a, a, a, a], [b, b, b, a], [b, b, b, a]])
+        assert origin[a] == 0 and origin[b] == 1
+
+    def test_connectivity_pieces_of_one_label_split(self):
+        labels = np.array([[0, 0, 1, 1, 0, 0]] * 3)
+        out, origin = enforce_connectivity(labels, 3, np.ones(2, dtype=bool))
+        assert len(np.unique(out)) == 3 and sorted(origin.tolist()) == [0, 0, 1]
+
+    def test_grid(self):
+        g = slic_grid(321, 481, 18)
+        assert len(g) == 18 * 27 and g[0].tolist() == [9.0, 9.0]
+        assert float(g[:, 0].max()) <= 480 and float(g[:, 1].max()) <= 320
+
+
 class TestSuperpixelMetrics:
     truth = np.array([[0, 0, 1, 1], [0, 0, 1, 1], [2, 2, 2, 2], [2, 2, 2, 2]])
 
@@ -183,3 +207,48 @@ class TestSuperpixelMetrics:
     def test_exception(self):
         with pytest.raises(InputShapeError, match="labels, truth"):
             undersegmentation_error(np.zeros((2, 2)), np.zeros((3, 3)))
+
+
+def test_refine_axis_photometric_recovers_the_axis():
+    """On an exactly mirrored image, a detuned axis (1 degree, 3 px) refined on its edges
+    comes back to the true one."""
+    from torchsym.image.symmslic.pairs import refine_axis_photometric
+    from torchsym.image.synthetic import mirrored_texture_image
+
+    img, axis = mirrored_texture_image(height=240, width=320, angle=30.0, generator=torch.Generator().manual_seed(3))
+    gray = img.mean(0).double()
+    gy, gx = torch.gradient(gray)
+    mag = torch.hypot(gx, gy)
+    ys, xs = torch.nonzero(mag > mag.quantile(0.95), as_tuple=True)
+    pts = torch.stack([xs, ys], 1).double()
+    refl = pts - 2.0 * (pts @ axis[:2] + axis[2])[:, None] * axis[:2]
+    keep = ((refl >= 5) & (refl <= torch.tensor([314.0, 234.0], dtype=torch.float64))).all(1)  # mirror in the image
+    pts, ys, xs = pts[keep], ys[keep], xs[keep]
+    grads = torch.stack([gx[ys, xs], gy[ys, xs]], 1)
+    grads = grads / grads.norm(dim=1, keepdim=True)
+    t = math.atan2(float(axis[1]), float(axis[0])) + math.radians(1.0)
+    n0 = torch.tensor([math.cos(t), math.sin(t)], dtype=torch.float64)
+    centre = torch.tensor([159.5, 119.5], dtype=torch.float64)
+    normal, offset = refine_axis_photometric(gray, pts, grads, n0, -(n0 @ centre) + 3.0)
+    assert abs(float(normal @ axis[:2])) > math.cos(math.radians(0.05))
+    assert abs(float(normal @ centre + offset)) < 0.3
+
+
+def test_symmetric_region_grows_through_mirrored_colour():
+    """On an image mirrored about x = 99.5, the hull of a few central pairs grows to the
+    whole image, and stays the hull with ``min_corr`` 1; a flat image does not grow."""
+    from torchsym.image.symmslic.pairs import MirrorPixelPairs
+    from torchsym.image.symmslic.solver import symmetric_region
+
+    half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(0)), size=(80, 100), mode="bilinear")[0]
+    lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200), mirrored
+    n, b = torch.tensor([[1.0, 0.0]], dtype=torch.float64), torch.tensor([-99.5], dtype=torch.float64)
+    left = torch.tensor([[90.0, 30.0], [90.0, 50.0], [95.0, 40.0]], dtype=torch.float64)
+    right = left * torch.tensor([-1.0, 1.0], dtype=torch.float64) + torch.tensor([199.0, 0.0], dtype=torch.float64)
+    pairs = MirrorPixelPairs(left, right, torch.zeros(3, dtype=torch.int64), n, b, torch.ones(1, dtype=torch.float64))
+    hull = symmetric_region(pairs, n, b, 80, 200)
+    grown = symmetric_region(pairs, n, b, 80, 200, lab, 0.8)
+    flat = symmetric_region(pairs, n, b, 80, 200, np.full_like(lab, 50.0), 0.8)
+    assert 0 < (hull >= 0).mean() < 0.05
+    assert (grown >= 0).mean() > 0.99
+    np.testing.assert_array_equal(flat, hull)

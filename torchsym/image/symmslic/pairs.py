@@ -8,9 +8,10 @@ isometric involution; the curves are compared in both directions of travel and t
 better kept, as a chain's direction carries no meaning). Each edge pixel is paired with
 ``h`` random others (the thesis's probability argument); each pair votes for its axis
 ``(phi, rho)`` with weight ``exp(-(o + o') / 4 sigma^2)``; the dominant peaks of the vote
-are the symmetry axes, each kept when enough of the edges around its pairs have a mirror
-edge (the support, which separates an object's symmetry from pairs that chance lines
-up). The gradient consistency of Eq. 4.5, which the thesis applies to
+are the symmetry axes, each refitted to its pairs, refined on the image
+(:func:`refine_axis_photometric`) and kept when enough of the edge pixels around its
+pairs have a mirror edge pixel (the support, which separates an object's symmetry from
+pairs that chance lines up). The gradient consistency of Eq. 4.5, which the thesis applies to
 the pairs of each peak, is applied before the vote: a pair it rejects could not be kept,
 and without its vote the peaks stand out (and the curve costs are computed for a fifth
 of the random pairs).
@@ -28,7 +29,7 @@ import torch.nn.functional as F
 from torchsym.image.boundary import boundary_curves
 from torchsym.image.symmslic.settings import MirrorPairSettings
 
-__all__ = ["MirrorPixelPairs", "curve_samples", "mirror_pixel_pairs", "reflect_2d"]
+__all__ = ["MirrorPixelPairs", "curve_samples", "mirror_pixel_pairs", "refine_axis_photometric", "reflect_2d"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -80,25 +81,80 @@ def curve_samples(chains: list[np.ndarray], *, length: float, n_samples: int, st
     return np.concatenate(centres), np.concatenate(curves)
 
 
-def _support(
-    points: torch.Tensor, grads: torch.Tensor, p: torch.Tensor, q: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor
-) -> float:
-    """Share of the edge samples within the axis's pairs' bounding box, reflected into
-    it, whose reflection lands within 2.5 px of an edge sample with a mirrored gradient (cosine > 0.8): near 1
-    on a symmetric object, a few percent for edges that only chance pairs up."""
+def _matches(
+    points: torch.Tensor,
+    grads: torch.Tensor,
+    p: torch.Tensor,
+    q: torch.Tensor,
+    normal: torch.Tensor,
+    offset: torch.Tensor,
+    radius: float = 2.5,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The edge points ``points (N, 2)`` (unit gradients ``grads``) within the bounding box
+    of the axis's pairs ``p, q``, reflected into it, whose reflection lands within
+    ``radius`` px of an edge point with a mirrored gradient (cosine > 0.8):
+    ``(matched (N,) bool, inside (N,) bool)``, ``inside`` the points considered."""
     from scipy.spatial import cKDTree
 
     both = torch.cat([p, q])
     lo, hi = both.min(0).values, both.max(0).values
     refl_all = points - 2.0 * (points @ normal + offset)[:, None] * normal
     inside = ((points >= lo) & (points <= hi)).all(1) & ((refl_all >= lo) & (refl_all <= hi)).all(1)
+    out = torch.zeros(len(points), dtype=torch.bool)
     if int(inside.sum()) < 2:
-        return 0.0
+        return out, inside
     pts, gr, refl = points[inside], grads[inside], refl_all[inside]
     dist, j = cKDTree(pts.numpy()).query(refl.numpy())
+    j = torch.from_numpy(j)
     g_m = gr - 2.0 * (gr @ normal)[:, None] * normal
-    consistent = (g_m * gr[torch.from_numpy(j)]).sum(1) > 0.8
-    return float(((torch.from_numpy(dist) < 2.5) & consistent).double().mean())
+    consistent = (g_m * gr[j]).sum(1) > 0.8
+    out[inside] = (torch.from_numpy(dist) < radius) & consistent
+    return out, inside
+
+
+def _support(matched: torch.Tensor, inside: torch.Tensor) -> float:
+    """Share of the edge pixels considered (see :func:`_matches`) that have a mirror
+    edge: high on a symmetric object, a few percent for edges that only chance pairs up."""
+    return float(matched.sum()) / int(inside.sum()) if int(inside.sum()) >= 2 else 0.0
+
+
+def refine_axis_photometric(
+    gray: torch.Tensor, points: torch.Tensor, grads: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor, n_iters: int = 8
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """The axis refined so that the image across the edges at ``points (N, 2)`` (unit
+    gradients ``grads``; profiles of 7 px along them) matches the image at their
+    reflections: Gauss-Newton on the grey-level differences of ``gray (H, W)``,
+    Cauchy-weighted."""
+    h, w = gray.shape
+    gy, gx = torch.gradient(gray)
+    stack = torch.stack([gray, gx, gy])[None].double()  # (1, 3, H, W)
+
+    def sample(xy: torch.Tensor) -> torch.Tensor:
+        grid = torch.stack([xy[:, 0] / (w - 1) * 2 - 1, xy[:, 1] / (h - 1) * 2 - 1], -1)[None, None]
+        return F.grid_sample(stack, grid, align_corners=True, padding_mode="border")[0, :, 0].T  # (M, 3)
+
+    t = torch.arange(-3, 4, dtype=torch.float64)
+    pts = (points[:, None] + t[None, :, None] * grads[:, None]).reshape(-1, 2)
+    base = sample(pts)[:, 0]
+    theta = torch.atan2(normal[1], normal[0])
+    b = offset.clone()
+    scale = float(base.std()) * 0.2 + 1e-6
+    for _ in range(n_iters):
+        n = torch.stack([torch.cos(theta), torch.sin(theta)])
+        dn = torch.stack([-torch.sin(theta), torch.cos(theta)])
+        d = pts @ n + b
+        refl = pts - 2.0 * d[:, None] * n
+        v = sample(refl)
+        r = v[:, 0] - base
+        gimg = v[:, 1:]
+        j_theta = (gimg * (-2.0 * (pts @ dn)[:, None] * n - 2.0 * d[:, None] * dn)).sum(1)
+        j_b = -2.0 * (gimg @ n)
+        wts = 1.0 / (1.0 + (r / scale) ** 2)
+        jac = torch.stack([j_theta, j_b], 1)
+        lhs = jac.T @ (wts[:, None] * jac) + 1e-9 * torch.eye(2, dtype=jac.dtype)
+        step = torch.linalg.solve(lhs, -(jac.T @ (wts * r)))
+        theta, b = theta + step[0], b + step[1]
+    return torch.stack([torch.cos(theta), torch.sin(theta)]), b
 
 
 def _peaks(acc: torch.Tensor, settings: MirrorPairSettings) -> list[tuple[int, int]]:
@@ -142,8 +198,11 @@ def mirror_pixel_pairs(
     x = torch.from_numpy(centres).float()  # (N, 2)
     cv = torch.from_numpy(curves).float()  # (N, S, 2)
     gy, gx = np.gradient(image.float().mean(0).cpu().numpy())
+    gray = torch.from_numpy(image.float().mean(0).cpu().numpy()).double()  # (H, W)
     grad = F.normalize(torch.from_numpy(np.stack([gx, gy], -1)).float(), dim=-1)  # (H, W, 2) unit gradients
     g = grad[x[:, 1].round().long().clamp(0, h - 1), x[:, 0].round().long().clamp(0, w - 1)]  # (N, 2)
+    edges = torch.from_numpy(np.concatenate([np.asarray(c, dtype=np.float64) for c in chains]))  # (E, 2) every chain pixel
+    edge_grads = grad[edges[:, 1].round().long().clamp(0, h - 1), edges[:, 0].round().long().clamp(0, w - 1)].double()
     hh = min(s.n_partners, n - 1)
     i = torch.arange(n).repeat_interleave(hh)  # (N h,)
     j = (i + 1 + torch.randint(0, n - 1, (n * hh,), generator=generator)) % n  # never i
@@ -183,7 +242,11 @@ def mirror_pixel_pairs(
         chord = torch.where((chord @ peak < 0)[:, None], -chord, chord)
         normal = F.normalize(chord.mean(0), dim=0)  # the axis refitted to its pairs
         offset = -(0.5 * (p + q) @ normal).median()
-        if _support(x.double(), g.double(), p, q, normal, offset) < s.min_support:
+        m, _ = _matches(x.double(), g.double(), p, q, normal, offset)
+        if int(m.sum()) >= 3:  # the axis refined on the edges that have a mirror edge
+            normal, offset = refine_axis_photometric(gray, x.double()[m], g.double()[m], normal, offset)
+        m, inside = _matches(edges, edge_grads, p, q, normal, offset, radius=1.5)
+        if _support(m, inside) < s.min_support:
             continue
         side = p @ normal + offset
         lft = torch.where((side < 0)[:, None], p, q)

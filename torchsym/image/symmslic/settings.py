@@ -25,7 +25,7 @@ class MirrorPairSettings(Settings):
     min_vote_share: float = setting(0.35, "an axis needs this share of the strongest axis's votes", low=0.0, high=1.0)
     min_pairs: int = setting(20, "least pairs for an axis to be kept", low=1)
     min_support: float = setting(
-        0.4, "least share of the edges around an axis's pairs that have a mirror edge for the axis to be kept", low=0.0, high=1.0
+        0.4, "least share of the edge pixels around an axis's pairs that have a mirror edge pixel (within 1.5 px) for the axis to be kept", low=0.0, high=1.0
     )
     edge_sigma: float = setting(2.0, "Gaussian smoothing of the edge detector", unit="px", low=0.5)
     min_edge_length: int = setting(20, "shortest boundary chain kept", unit="px", low=4)
@@ -41,5 +41,11 @@ class SymmSlicSettings(Settings):
     )
     max_iters: int = setting(10, "k-means iterations", low=1)
     pairs: MirrorPairSettings = group(MirrorPairSettings)
+    min_mirror_correlation: float = setting(
+        0.8,
+        "the symmetric region grows from the hull of an axis's pairs through pixels whose neighbourhood (Gaussian 4 px) correlates with the mirror image's at least this much; 1: the hull only",
+        low=-1.0,
+        high=1.0,
+    )
     min_size_share: float = setting(0.25, "fragments smaller than this share of the mean superpixel are merged", low=0.0, high=1.0)
     seed: int = setting(0, "seed of the module's generator", low=0)

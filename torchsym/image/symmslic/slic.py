@@ -102,11 +102,11 @@ def _assign(lab: torch.Tensor, shape: tuple[int, int], c: Centres, maps: MirrorM
     flat ``lab (H * W, 3)``; returns the labels ``(H, W)`` after the mirror pass."""
     h, w = shape
     active = torch.nonzero((c.partner < 0) | c.left)[:, 0]  # (Ka,)
-    off = torch.arange(-step, step + 1)
+    off = torch.arange(-step, step)  # SLIC's 2S x 2S window from the centre's pixel
     oy, ox = torch.meshgrid(off, off, indexing="ij")
     ox, oy = ox.reshape(1, -1), oy.reshape(1, -1)
     cxy = c.xy[active]
-    cx, cy = cxy[:, 0].round().long(), cxy[:, 1].round().long()
+    cx, cy = cxy[:, 0].floor().long(), cxy[:, 1].floor().long()
     px, py = cx[:, None] + ox, cy[:, None] + oy  # (Ka, M)
     valid = (px >= 0) & (px < w) & (py >= 0) & (py < h)
     pix = py.clamp(0, h - 1) * w + px.clamp(0, w - 1)  # (Ka, M)
@@ -187,12 +187,34 @@ def _components(labels: np.ndarray) -> np.ndarray:
     return np.where(flat >= 0, comp, -1).reshape(h, w)
 
 
+def _raster_neighbour(comp: np.ndarray, first: np.ndarray, heads: np.ndarray) -> np.ndarray:
+    """For the components ``heads``, the flat index of the pixel SLIC's scan merges each
+    into: of the 4-neighbours of the component's first pixel in raster order that belong to
+    a component met earlier in the scan, the last in the order left, up, right, down (-1:
+    none)."""
+    h, w = comp.shape
+    flat = comp.reshape(-1)
+    p = first[heads]
+    py, px = p // w, p % w
+    out = np.full(len(heads), -1, dtype=np.int64)
+    for dx, dy in ((-1, 0), (0, -1), (1, 0), (0, 1)):
+        qx, qy = px + dx, py + dy
+        inside = (qx >= 0) & (qx < w) & (qy >= 0) & (qy < h)
+        q = np.where(inside, qy * w + qx, 0)
+        cq = flat[q]
+        earlier = inside & (np.where(cq >= 0, first[np.clip(cq, 0, None)], -1) < p)
+        out = np.where(earlier, q, out)
+    return out
+
+
 def enforce_connectivity(labels: np.ndarray, min_size: int, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """SLIC's last step (Achanta et al.'s ``EnforceLabelConnectivity``): every 4-connected
     piece of at least ``min_size`` pixels of an *active* label (``active``: ``(K,)`` bool)
-    becomes a superpixel of its own; smaller pieces and unlabelled pixels (-1) take the
-    label of the nearest such piece. Pixels of inactive labels are left out (set to -1):
-    the right members of pairs, derived afterwards from their partners.
+    becomes a superpixel of its own; a smaller piece joins, whole, the piece met just
+    before it in a raster scan (the neighbour of its first pixel, as SLIC's code does).
+    Pixels of inactive labels (the right members of pairs, derived afterwards from their
+    partners), unlabelled pixels (-1) and small pieces whose neighbour is such a pixel
+    take the label of the nearest kept pixel.
 
     Returns:
         ``(labels (H, W), origin (K',))``: new labels ``0 .. K'-1`` and the old label
@@ -201,18 +223,32 @@ def enforce_connectivity(labels: np.ndarray, min_size: int, active: np.ndarray) 
     h, w = labels.shape
     lbl = np.where((labels >= 0) & active[np.clip(labels, 0, None)], labels, -1)
     comp = _components(lbl)
-    valid = comp >= 0
-    sizes = np.bincount(comp[valid], minlength=1)
-    big = np.zeros(sizes.shape[0], dtype=bool)
-    big[: len(sizes)] = sizes >= min_size
-    kept = valid & big[np.clip(comp, 0, None)]
-    if not kept.any():
+    flat = comp.reshape(-1)
+    valid = flat >= 0
+    n = int(flat.max()) + 1 if valid.any() else 0
+    sizes = np.bincount(flat[valid], minlength=n)
+    first = np.full(n, h * w, dtype=np.int64)
+    np.minimum.at(first, flat[valid], np.nonzero(valid)[0])
+    big = sizes >= min_size
+    if not big.any():
         return np.zeros((h, w), dtype=np.int64), np.zeros(1, dtype=np.int64) + max(int(labels.max()), 0)
-    ids, new = np.unique(comp[kept], return_inverse=True)
-    out = np.full((h, w), -1, dtype=np.int64)
-    out[kept] = new
+    root = np.arange(n)
+    heads = np.nonzero(~big)[0]
+    q = _raster_neighbour(comp, first, heads)
+    root[heads] = np.where(q >= 0, flat[np.clip(q, 0, None)], -1)
+    while True:  # a small piece's neighbour was met earlier, so the chains end
+        nxt = np.where(root >= 0, root[np.clip(root, 0, None)], -1)
+        if np.array_equal(nxt, root):
+            break
+        root = nxt
+    ids, new = np.unique(np.nonzero(big)[0], return_inverse=True)
+    comp_new = np.full(n, -1, dtype=np.int64)
+    comp_new[ids] = new
+    out = np.where(valid, comp_new[np.where(root >= 0, root, 0)[np.clip(flat, 0, None)]], -1)
+    out = np.where(valid & (root[np.clip(flat, 0, None)] >= 0), out, -1).reshape(h, w)
     origin = np.zeros(len(ids), dtype=np.int64)
-    origin[new] = lbl[kept]
+    origin[new] = lbl.reshape(-1)[first[ids]]
+    kept = out >= 0
     if not kept.all():
         _, (iy, ix) = ndimage.distance_transform_edt(~kept, return_indices=True)
         out = out[iy, ix]

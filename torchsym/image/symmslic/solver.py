@@ -28,6 +28,7 @@ import cv2
 import kornia
 import numpy as np
 import torch
+from scipy import ndimage
 
 from torchsym.core.checks import check_image
 from torchsym.core.random import make_generator
@@ -46,10 +47,40 @@ __all__ = ["LAB_SCALE", "SymmSlic", "symm_slic", "symmetric_region"]
 LAB_SCALE = torch.tensor([255.0 / 100.0, 1.0, 1.0])
 
 
-def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: torch.Tensor, h: int, w: int) -> np.ndarray:
+def _grow(hull: np.ndarray, lab: np.ndarray, normal: np.ndarray, offset: float, min_corr: float) -> np.ndarray:
+    """``hull (H, W)`` bool grown through the pixels whose neighbourhood (Gaussian, 4 px)
+    correlates with the mirror image's at least ``min_corr`` (normalised cross-correlation
+    over the 3 channels of ``lab (3, H, W)``; a flat patch, variance under 4, correlates
+    with nothing), keeping the pixels whose mirror lies in the image, then made symmetric."""
+    h, w = hull.shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    d = xs * normal[0] + ys * normal[1] + offset
+    mx, my = np.round(xs - 2 * d * normal[0]).astype(np.int64), np.round(ys - 2 * d * normal[1]).astype(np.int64)
+    band = (mx >= 0) & (mx < w) & (my >= 0) & (my < h)
+    mx, my = mx.clip(0, w - 1), my.clip(0, h - 1)
+    x = lab.astype(np.float64)
+    y = x[:, my, mx]  # the mirror image
+    sig = (0.0, 4.0, 4.0)
+    mxv, myv = ndimage.gaussian_filter(x, sig), ndimage.gaussian_filter(y, sig)
+    cov = (ndimage.gaussian_filter(x * y, sig) - mxv * myv).sum(0)
+    vx = (ndimage.gaussian_filter(x * x, sig) - mxv**2).sum(0)
+    vy = (ndimage.gaussian_filter(y * y, sig) - myv**2).sum(0)
+    ncc = cov / np.sqrt((vx + 4.0) * (vy + 4.0))
+    agree = band & ((ncc >= min_corr) | hull)
+    comp, _ = ndimage.label(agree)
+    seeds = np.unique(comp[hull & agree])
+    grown = np.isin(comp, seeds[seeds > 0])
+    return grown | (grown[my, mx] & band)
+
+
+def symmetric_region(
+    pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: torch.Tensor, h: int, w: int, lab: np.ndarray | None = None, min_corr: float = 1.0
+) -> np.ndarray:
     """``(H, W)`` int64 axis index of the symmetric region of each axis (-1 outside): the
-    convex hull of the axis's pairs, or with no pairs (axes given by the caller) the
-    pixels whose mirror lies in the image. The first axis wins where regions overlap."""
+    convex hull of the axis's pairs, grown (given ``lab (3, H, W)`` and ``min_corr < 1``)
+    through the pixels whose neighbourhood correlates with the mirror image's at least
+    ``min_corr``; with no pairs (axes given by the caller) the pixels whose mirror lies in
+    the image. The first axis wins where regions overlap."""
     region = np.full((h, w), -1, dtype=np.int64)
     ys, xs = np.mgrid[0:h, 0:w]
     for a in reversed(range(normals.shape[0])):
@@ -60,7 +91,10 @@ def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: to
             hull = cv2.convexHull(pts.round().astype(np.int32))
             m = np.zeros((h, w), np.uint8)
             cv2.fillConvexPoly(m, hull, 1)
-            region[m > 0] = a
+            inside = m > 0
+            if min_corr < 1.0 and lab is not None:
+                inside = _grow(inside, lab, normals[a].numpy(), float(offsets[a]), min_corr)
+            region[inside] = a
         else:
             n, b = normals[a].numpy(), float(offsets[a])
             d = xs * n[0] + ys * n[1] + b
@@ -70,32 +104,55 @@ def symmetric_region(pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: to
     return region
 
 
+def slic_grid(h: int, w: int, step: int) -> torch.Tensor:
+    """SLIC's seed grid ``(G, 2)`` float64 ``(x, y)``: ``round(W / S)`` columns and
+    ``round(H / S)`` rows from ``S // 2``, the remainder spread over the strips (as
+    Achanta et al.'s code)."""
+
+    def axis(n: int) -> np.ndarray:
+        strips = max(1, int(0.5 + n / step))
+        per = int((n - step * strips) / strips)  # truncated towards 0
+        pos = np.arange(strips) * (step + per) + step // 2
+        return pos[pos <= n - 1]
+
+    ys, xs = np.meshgrid(axis(h), axis(w), indexing="ij")
+    return torch.from_numpy(np.stack([xs.reshape(-1), ys.reshape(-1)], 1).astype(np.float64))
+
+
+def _lowest(grad: torch.Tensor, cand: torch.Tensor, mir: torch.Tensor | None = None) -> torch.Tensor:
+    """Index into the 9 candidates ``cand (N, 9, 2)`` of the lowest gradient (summed
+    with that at the mirror points ``mir`` when given)."""
+    h, w = grad.shape
+
+    def at(p: torch.Tensor) -> torch.Tensor:
+        xi, yi = p[..., 0].round().long().clamp(0, w - 1), p[..., 1].round().long().clamp(0, h - 1)
+        return grad[yi, xi]
+
+    return (at(cand) + (at(mir) if mir is not None else 0.0)).argmin(1)
+
+
 def _init_centres(
     lab: torch.Tensor, grad: torch.Tensor, region: np.ndarray, normals: torch.Tensor, offsets: torch.Tensor, step: int
 ) -> Centres:
-    """SLIC's grid; grid points in an axis's region on its left side become pairs with
-    their reflections (moved within 3 x 3 to the lowest gradient of the pair)."""
+    """SLIC's grid, each seed moved within 3 x 3 to the lowest gradient; grid points in an
+    axis's region on its left side become pairs with their reflections (moved to the
+    lowest gradient of the pair)."""
     _, h, w = lab.shape
-    ys, xs = np.meshgrid(np.arange(step / 2, h, step), np.arange(step / 2, w, step), indexing="ij")
-    g = torch.from_numpy(np.stack([xs.reshape(-1), ys.reshape(-1)], 1))  # (G, 2)
-    a = torch.from_numpy(region[g[:, 1].long().clamp(0, h - 1), g[:, 0].long().clamp(0, w - 1)])
+    g = slic_grid(h, w, step)
+    a = torch.from_numpy(region[g[:, 1].long(), g[:, 0].long()])
     side = torch.zeros(len(g), dtype=g.dtype)
     if len(normals):
         side = torch.where(a >= 0, (g * normals[a.clamp(min=0)]).sum(1) + offsets[a.clamp(min=0)], side)
+    d = torch.tensor([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=g.dtype)
     plain = g[a < 0]
+    plain = (plain[:, None] + d[None])[torch.arange(len(plain)), _lowest(grad, plain[:, None] + d[None])]
+    plain[:, 0].clamp_(0, w - 1)
+    plain[:, 1].clamp_(0, h - 1)
     lefts, axes = g[(a >= 0) & (side <= 0)], a[(a >= 0) & (side <= 0)]
     if len(lefts):
-        d = torch.tensor([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], dtype=g.dtype)
         cand = lefts[:, None] + d[None]  # (L, 9, 2)
-        n, b = normals[axes][:, None], offsets[axes][:, None]
-        mir = reflect_2d(cand, n, b)
-
-        def at(p):
-            xi, yi = p[..., 0].round().long().clamp(0, w - 1), p[..., 1].round().long().clamp(0, h - 1)
-            return grad[yi, xi]
-
-        best = (at(cand) + at(mir)).argmin(1)
-        lefts = cand[torch.arange(len(lefts)), best]
+        mir = reflect_2d(cand, normals[axes][:, None], offsets[axes][:, None])
+        lefts = cand[torch.arange(len(lefts)), _lowest(grad, cand, mir)]
         rights = reflect_2d(lefts, normals[axes], offsets[axes])
         inside = (rights[:, 0] >= 0) & (rights[:, 0] <= w - 1) & (rights[:, 1] >= 0) & (rights[:, 1] <= h - 1)
         plain = torch.cat([plain, lefts[~inside]])
@@ -185,9 +242,9 @@ def symm_slic(
     timings["pairs"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lab = kornia.color.rgb_to_lab(rgb[None])[0] * LAB_SCALE[:, None, None]  # (3, H, W), OpenCV's 8-bit Lab scale
-    gy, gx = np.gradient(lab[0].numpy())
-    grad = torch.from_numpy(np.hypot(gx, gy))
-    region = symmetric_region(found, normals, offsets, h, w)
+    gy, gx = np.gradient(lab.numpy(), axis=(1, 2))
+    grad = torch.from_numpy(np.sqrt((gx**2 + gy**2).sum(0)))  # (H, W) Lab gradient magnitude
+    region = symmetric_region(found, normals, offsets, h, w, lab.numpy(), settings.min_mirror_correlation)
     step = max(1, int(round(math.sqrt(h * w / settings.n_superpixels))))
     c = _init_centres(lab, grad, region, normals, offsets, step)
     timings["init"] = time.perf_counter() - t0
