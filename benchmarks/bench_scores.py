@@ -113,11 +113,13 @@ def _smooth(img: torch.Tensor, sigma: float) -> torch.Tensor:
 
 
 def image_inputs(quick: bool) -> tuple[list, list]:
-    n = 1 if quick else 2
+    n = 2 if quick else 8
     sym = [(f"mirrored texture #{k}", mirrored_texture_image(height=160, width=200, generator=_gen(80 + k))[0]) for k in range(n)]
-    sym += [(f"mirrored object #{k}", mirrored_objects_image(1, height=160, width=200, generator=_gen(90 + k))[0]) for k in range(n)]
-    asym = [("uniform noise 128 px", torch.rand(3, 128, 128, generator=_gen(100)))]
-    asym += [(f"smoothed noise sigma {s}", _smooth(torch.rand(3, 160, 200, generator=_gen(110 + s)), s)) for s in (2, 4)[:n]]
+    sym += [(f"mirrored object #{k}", mirrored_objects_image(1, height=160, width=200, generator=_gen(90 + k))[0])
+            for k in range(n)]
+    asym = [(f"uniform noise 128 px #{k}", torch.rand(3, 128, 128, generator=_gen(1100 + k))) for k in range(n)]
+    asym += [(f"smoothed noise sigma {2 + 2 * (k % 2)} #{k}", _smooth(torch.rand(3, 160, 200, generator=_gen(1110 + k)), 2 + 2 * (k % 2)))
+             for k in range(n)]
     return sym, asym
 
 
