@@ -11,7 +11,7 @@ from torchsym.mesh.geodesic import geodesic_distances
 __all__ = ["NEAR_SELF_LIMIT", "GeodesicProbe"]
 
 #: share of the probed vertices a map may leave near themselves (more: a partial identity)
-NEAR_SELF_LIMIT = 0.6
+NEAR_SELF_LIMIT = 0.45
 
 
 class GeodesicProbe:
