@@ -54,8 +54,8 @@ class TestSoftRefinePlane:
         s = planted(100, 3, 0.0, 8)
         p, q = s.points.numpy(), s.points[s.correspondence].numpy()
         w = np.ones(p.shape[0])
-        se1 = normal_standard_error(p, q, w, s.normal.numpy(), 1e-4)
-        se4 = normal_standard_error(p, q, w, s.normal.numpy(), 4e-4)
+        se1 = normal_standard_error(p, q, w, 1e-4)
+        se4 = normal_standard_error(p, q, w, 4e-4)
         assert se1 > 0 and abs(se4 / se1 - 2.0) < 1e-9
 
 

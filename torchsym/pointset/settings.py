@@ -52,7 +52,7 @@ class SoftSettings(Settings):
     n_neighbors: int = setting(16, "candidate mirrors per point of the soft correspondences", low=1)
     max_iters: int = setting(100, "EM iterations at most", low=1)
     tol_se: float = setting(
-        0.02, "stop when the normal moves less than this many standard errors of its fit (what is left to go included)",
+        0.005, "stop when the normal moves less than this many standard errors of its fit (what is left to go included)",
         unit="x standard error", low=0.0,
     )
 

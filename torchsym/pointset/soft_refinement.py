@@ -43,6 +43,9 @@ _EXACT_S2 = 1e-20
 # Symmetric Sinkhorn sweeps per E-step.
 _SINKHORN_SWEEPS = 50
 
+# Largest ratio of successive EM steps trusted when extrapolating what is left to go.
+_MAX_STEP_RATIO = 0.95
+
 
 @dataclasses.dataclass(frozen=True)
 class SoftPlane:
@@ -91,24 +94,26 @@ def _e_step(x: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, s2:
     return a, c, kernel * u[a] * u[c]
 
 
-def normal_standard_error(p: np.ndarray, q: np.ndarray, weight: np.ndarray, normal: np.ndarray, s2: float) -> float:
+def normal_standard_error(p: np.ndarray, q: np.ndarray, weight: np.ndarray, s2: float) -> float:
     """Standard error (radians) of the least-squares reflection normal of the pairs
     ``(p, q)`` (``(P, D)`` each, weights ``(P,)``) with residual variance ``s2`` per
-    coordinate: from the curvature of ``1/4 sum w |S p - q|^2 = n^T M n`` about ``normal``,
+    coordinate: ``1/4 sum w |S p - q|^2 = n^T M n`` with
     ``M = 1/4 sum w (|u|^2 I - u u^T) + sum w (m - mean m)(m - mean m)^T`` (chords ``u``,
-    midpoints ``m``), in its flattest tilt direction."""
+    midpoints ``m``) is least at the normal, the eigenvector of ``M``'s smallest eigenvalue
+    ``l_1``; tilting it by ``theta`` towards the next one costs ``(l_2 - l_1) theta^2``, so
+    the Gaussian log likelihood ``-2 n^T M n / s2`` gives ``theta`` the variance
+    ``s2 / (4 (l_2 - l_1))``."""
+    p, q, w = torch.from_numpy(p), torch.from_numpy(q), torch.from_numpy(weight)  # torch: its own thread setting
     u, m = p - q, 0.5 * (p + q)
-    w = weight
-    mc = m - (w @ m) / max(float(w.sum()), 1e-300)
-    mat = 0.25 * (float(w @ (u * u).sum(1)) * np.eye(u.shape[1]) - (u * w[:, None]).T @ u) + (mc * w[:, None]).T @ mc
-    basis = np.linalg.svd(np.eye(u.shape[1]) - np.outer(normal, normal))[0][:, :-1]  # (D, D-1) spans the plane
-    curvature = float(np.linalg.eigvalsh(basis.T @ mat @ basis)[0]) - float(normal @ mat @ normal)
-    return float(np.sqrt(s2 / max(4.0 * curvature, 1e-300)))
+    mc = m - (w @ m) / w.sum().clamp_min(1e-300)
+    mat = 0.25 * ((w @ (u * u).sum(1)) * torch.eye(u.shape[1], dtype=u.dtype) - (u * w[:, None]).T @ u) + (mc * w[:, None]).T @ mc
+    low = torch.linalg.eigvalsh(mat)[:2]
+    return float(np.sqrt(s2 / max(4.0 * float(low[1] - low[0]), 1e-300)))
 
 
 def soft_refine_plane(
     points: np.ndarray, normal: np.ndarray, offset: float, s2: float, *,
-    tree: cKDTree | None = None, n_neighbors: int = 16, max_iters: int = 100, tol_se: float = 0.02,
+    tree: cKDTree | None = None, n_neighbors: int = 16, max_iters: int = 100, tol_se: float = 0.005,
 ) -> SoftPlane:
     """EM on soft, Sinkhorn-balanced correspondences from the plane ``(normal, offset)``.
 
@@ -152,7 +157,7 @@ def soft_refine_plane(
         moved = 2.0 * float(np.arcsin(min(1.0, 0.5 * float(np.linalg.norm(step)))))  # radians
         ahead = _remaining_factor(step, previous)
         previous = step
-        if moved * ahead <= tol_se * normal_standard_error(x[a], x[c], weight, normal, s2):
+        if moved * ahead <= tol_se * normal_standard_error(x[a], x[c], weight, s2):
             converged = True
             break
     return SoftPlane(normal, offset, s2, it, converged)
@@ -166,4 +171,4 @@ def _remaining_factor(step: np.ndarray, previous: np.ndarray | None) -> float:
         return 1.0
     denom = float(previous @ previous)
     r = float(step @ previous) / denom if denom > 0 else 0.0
-    return 1.0 / (1.0 - min(max(r, 0.0), 0.95))
+    return 1.0 / (1.0 - min(max(r, 0.0), _MAX_STEP_RATIO))
