@@ -19,8 +19,7 @@ that the hard fit only approximates by its mode (``docs/design/pointsymm.md``):
 EM stops once the normal moves less than ``tol_se`` standard errors of its own fit (the
 step counted with what a linearly converging sequence still has to go), so the tolerance
 follows the noise: tight on nearly exact symmetries, loose where the data cannot pin the
-plane.
-``s^2`` starts at the hard fit's residual variance; an exact symmetry (zero residuals) is
+plane. ``s^2`` starts at the hard fit's residual variance; an exact symmetry (zero residuals) is
 left as it is.
 """
 
