@@ -7,7 +7,7 @@ import torch
 
 from torchsym.geometry import plane_angle
 from torchsym.pointset import make_symmetric_pointset, point_symm
-from torchsym.pointset.soft_refinement import SoftPlane, soft_refine_plane
+from torchsym.pointset.soft_refinement import SoftPlane, normal_standard_error, soft_refine_plane
 
 
 def planted(n, d, sigma2, seed):
@@ -37,6 +37,26 @@ class TestSoftRefinePlane:
         s = planted(300, 3, 1e-3, 3)
         r = soft_refine_plane(s.points.numpy(), s.normal.numpy(), float(s.offset), 1e-4)
         assert 0.5 * 2e-3 < r.s2 < 2.0 * 2e-3  # the mirror residual has variance 2 sigma^2 per coordinate
+
+
+    def test_stops_on_noise_scale_without_symmetry(self):
+        x = np.random.default_rng(0).random((200, 3))
+        r = soft_refine_plane(x, np.array([1.0, 0.0, 0.0]), -0.5, 1e-2, max_iters=100)
+        assert r.converged and r.iterations < 100
+
+    def test_tighter_tolerance_runs_longer(self):
+        s = planted(200, 3, 3e-3, 6)
+        loose = soft_refine_plane(s.points.numpy(), s.normal.numpy(), float(s.offset), 1e-3, tol_se=0.5)
+        tight = soft_refine_plane(s.points.numpy(), s.normal.numpy(), float(s.offset), 1e-3, tol_se=1e-3)
+        assert loose.iterations <= tight.iterations
+
+    def test_standard_error_scales_with_noise(self):
+        s = planted(100, 3, 0.0, 8)
+        p, q = s.points.numpy(), s.points[s.correspondence].numpy()
+        w = np.ones(p.shape[0])
+        se1 = normal_standard_error(p, q, w, 1e-4)
+        se4 = normal_standard_error(p, q, w, 4e-4)
+        assert se1 > 0 and abs(se4 / se1 - 2.0) < 1e-9
 
 
 class TestInPointSymm:

@@ -51,7 +51,10 @@ class SoftSettings(Settings):
     enabled: bool = setting(True, "refine the plane on soft correspondences (skipped for exact symmetries and match_fraction < 1)")
     n_neighbors: int = setting(16, "candidate mirrors per point of the soft correspondences", low=1)
     max_iters: int = setting(100, "EM iterations at most", low=1)
-    tol_angle: float = setting(1e-6, "stop when the normal moves less than this", unit="deg", low=0.0)
+    tol_se: float = setting(
+        0.005, "stop when the normal moves less than this many standard errors of its fit (what is left to go included)",
+        unit="x standard error", low=0.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)

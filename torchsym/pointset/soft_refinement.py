@@ -14,9 +14,12 @@ that the hard fit only approximates by its mode (``docs/design/pointsymm.md``):
   one mirror's worth of partner, as in the hard assignment);
 - M-step: the least-squares reflection for the weighted pairs, in closed form
   (:func:`~torchsym.geometry.plane_from_pairs`), and the residual variance ``s^2`` (per
-  coordinate) re-estimated from the weighted residuals.
+  coordinate) re-estimated from the weighted residuals, so the noise level need not be known.
 
-``s^2`` starts at the hard fit's residual variance; an exact symmetry (zero residuals) is
+EM stops once the normal moves less than ``tol_se`` standard errors of its own fit (the
+step counted with what a linearly converging sequence still has to go), so the tolerance
+follows the noise: tight on nearly exact symmetries, loose where the data cannot pin the
+plane. ``s^2`` starts at the hard fit's residual variance; an exact symmetry (zero residuals) is
 left as it is.
 """
 
@@ -30,7 +33,7 @@ from scipy.spatial import cKDTree
 
 from torchsym.geometry import plane_from_pairs
 
-__all__ = ["SoftPlane", "soft_refine_plane"]
+__all__ = ["SoftPlane", "normal_standard_error", "soft_refine_plane"]
 
 # Residual variance, relative to the mean squared radius, below which the hard fit is an exact
 # symmetry up to rounding and is returned as it is.
@@ -38,6 +41,9 @@ _EXACT_S2 = 1e-20
 
 # Symmetric Sinkhorn sweeps per E-step.
 _SINKHORN_SWEEPS = 50
+
+# Largest ratio of successive EM steps trusted when extrapolating what is left to go.
+_MAX_STEP_RATIO = 0.95
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,9 +85,34 @@ def _balance(a: np.ndarray, c: np.ndarray, kernel: np.ndarray, u: np.ndarray) ->
     return u
 
 
+def _e_step(x: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, s2: float, k: int):
+    """Pairs ``(a, c)`` and their balanced weights ``(P,)`` at residual variance ``s2``."""
+    a, c, d2 = _pairs(x, tree, normal, offset, k)
+    kernel = np.exp(-(d2 - d2.min()) / (2.0 * s2))
+    u = _balance(a, c, kernel, np.ones(x.shape[0]))
+    return a, c, kernel * u[a] * u[c]
+
+
+def normal_standard_error(p: np.ndarray, q: np.ndarray, weight: np.ndarray, s2: float) -> float:
+    """Standard error (radians) of the least-squares reflection normal of the pairs
+    ``(p, q)`` (``(P, D)`` each, weights ``(P,)``) with residual variance ``s2`` per
+    coordinate: ``1/4 sum w |S p - q|^2 = n^T M n`` with
+    ``M = 1/4 sum w (|u|^2 I - u u^T) + sum w (m - mean m)(m - mean m)^T`` (chords ``u``,
+    midpoints ``m``) is least at the normal, the eigenvector of ``M``'s smallest eigenvalue
+    ``l_1``; tilting it by ``theta`` towards the next one costs ``(l_2 - l_1) theta^2``, so
+    the Gaussian log likelihood ``-2 n^T M n / s2`` gives ``theta`` the variance
+    ``s2 / (4 (l_2 - l_1))``."""
+    p, q, w = torch.from_numpy(p), torch.from_numpy(q), torch.from_numpy(weight)  # torch: its own thread setting
+    u, m = p - q, 0.5 * (p + q)
+    mc = m - (w @ m) / w.sum().clamp_min(1e-300)
+    mat = 0.25 * ((w @ (u * u).sum(1)) * torch.eye(u.shape[1], dtype=u.dtype) - (u * w[:, None]).T @ u) + (mc * w[:, None]).T @ mc
+    low = torch.linalg.eigvalsh(mat)[:2]
+    return float(np.sqrt(s2 / max(4.0 * float(low[1] - low[0]), 1e-300)))
+
+
 def soft_refine_plane(
     points: np.ndarray, normal: np.ndarray, offset: float, s2: float, *,
-    tree: cKDTree | None = None, n_neighbors: int = 16, max_iters: int = 100, tol_angle: float = 1e-6,
+    tree: cKDTree | None = None, n_neighbors: int = 16, max_iters: int = 100, tol_se: float = 0.005,
 ) -> SoftPlane:
     """EM on soft, Sinkhorn-balanced correspondences from the plane ``(normal, offset)``.
 
@@ -94,7 +125,9 @@ def soft_refine_plane(
         tree: a :class:`cKDTree` of ``points`` to reuse.
         n_neighbors: candidate mirrors per point.
         max_iters: most EM iterations.
-        tol_angle: stop when the normal moves less than this, in degrees.
+        tol_se: stop when the normal moves less than this many standard errors of its fit
+            (:func:`normal_standard_error`), the step times ``1 / (1 - r)``, ``r`` the ratio
+            of successive steps (clipped to [0, 0.95]).
 
     Returns:
         :class:`SoftPlane`, its normal on the side of the starting one.
@@ -105,15 +138,11 @@ def soft_refine_plane(
     if not s2 > _EXACT_S2 * float((x**2).sum(1).mean()) or n_pts < 3:
         return SoftPlane(normal, offset, max(float(s2), 0.0), 0, True)
     tree = cKDTree(x) if tree is None else tree
-    tol = 2.0 * np.sin(np.radians(tol_angle) / 2.0)
-    converged, it = False, 0
+    converged, it, previous = False, 0, None
     for it in range(1, max_iters + 1):
-        a, c, d2 = _pairs(x, tree, normal, offset, n_neighbors)  # E-step
         if it == 1:  # anneal: start as wide as the candidates' residuals
-            s2 = max(s2, float(np.median(d2)) / dim)
-        kernel = np.exp(-(d2 - d2.min()) / (2.0 * s2))
-        u = _balance(a, c, kernel, np.ones(n_pts))
-        weight = kernel * u[a] * u[c]  # (P,) soft matching of the unordered pairs
+            s2 = max(s2, float(np.median(_pairs(x, tree, normal, offset, n_neighbors)[2])) / dim)
+        a, c, weight = _e_step(x, tree, normal, offset, s2, n_neighbors)  # E-step
         new_normal, new_offset = plane_from_pairs(  # M-step
             torch.from_numpy(x[a]), torch.from_numpy(x[c]), torch.from_numpy(weight)
         )
@@ -122,9 +151,23 @@ def soft_refine_plane(
             new_normal, new_offset = -new_normal, -new_offset
         r2 = ((_reflect(x[a], new_normal, new_offset) - x[c]) ** 2).sum(1)
         s2 = max(float((weight * r2).sum() / (weight.sum() * dim)), 1e-300)
-        moved = float(np.linalg.norm(new_normal - normal)) + abs(new_offset - offset)
+        step = new_normal - normal
         normal, offset = new_normal, new_offset
-        if moved <= tol:
+        moved = 2.0 * float(np.arcsin(min(1.0, 0.5 * float(np.linalg.norm(step)))))  # radians
+        ahead = _remaining_factor(step, previous)
+        previous = step
+        if moved * ahead <= tol_se * normal_standard_error(x[a], x[c], weight, s2):
             converged = True
             break
     return SoftPlane(normal, offset, s2, it, converged)
+
+
+def _remaining_factor(step: np.ndarray, previous: np.ndarray | None) -> float:
+    """``1 / (1 - r)``, ``r`` the last ``step`` over the ``previous`` one projected on it,
+    clipped to [0, 0.95]: how far a linearly converging sequence still goes in units of its
+    last step (1 without a previous step)."""
+    if previous is None:
+        return 1.0
+    denom = float(previous @ previous)
+    r = float(step @ previous) / denom if denom > 0 else 0.0
+    return 1.0 / (1.0 - min(max(r, 0.0), _MAX_STEP_RATIO))

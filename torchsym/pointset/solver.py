@@ -181,7 +181,7 @@ def _soften(problem: Alternation, best: AlternationRun, settings: PointSymmSetti
     normal = tf.normal_from_rotations(rots).numpy()
     refined = soft_refine_plane(
         problem.points, normal, -float(normal @ t.numpy()), s2, tree=problem.tree,
-        n_neighbors=soft.n_neighbors, max_iters=soft.max_iters, tol_angle=soft.tol_angle,
+        n_neighbors=soft.n_neighbors, max_iters=soft.max_iters, tol_se=soft.tol_se,
     )
     if refined.iterations == 0:
         return best
