@@ -22,7 +22,7 @@ from torchsym.pointcloud.reflection_plane.prealign import point_to_plane_step
 from torchsym.pointcloud.reflection_plane.prepare import spacing
 from torchsym.pointcloud.reflection_plane.settings import PolishSettings, ReflectionPlaneSettings
 
-__all__ = ["Polished", "pairs_fit", "local_surface", "polish", "surface_steps"]
+__all__ = ["Polished", "pair_steps", "local_surface", "polish", "surface_steps"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,26 +93,43 @@ def surface_steps(
     return normal, offset, it, converged, se
 
 
-def pairs_fit(
-    points: torch.Tensor, dist: torch.Tensor, nn_idx: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor,
-    se: float, max_residual: float,
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """One step of Algorithm 6 from the residuals ``dist (N,)`` and nearest points
-    ``nn_idx (N,)`` of ``points (N, 3)`` at ``(normal, offset)`` (pairs as
-    :func:`~torchsym.pointcloud.reflection_plane.alternation.kept_pairs`), taken when the
-    pairs' fit has a standard error below ``se`` (radians); else ``(normal, offset)``.
+def pair_steps(
+    points: torch.Tensor, index: KNNIndex, normal: torch.Tensor, offset: torch.Tensor, se: float,
+    max_residual: float, max_iters: int,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, int]:
+    """Algorithm 6 steps on every point of ``points (N, 3)`` (``index`` over them; pairs as
+    :func:`~torchsym.pointcloud.reflection_plane.alternation.kept_pairs`), each taken only
+    when its pairs' fit has a smaller standard error than the plane it replaces (``se``,
+    radians, for the first), until a step moves the normal by less than its own standard
+    error, or after ``max_iters`` steps.
 
-    Where the cloud holds exact mirrors, their least-squares reflection is exact, which
-    steps to a local surface (an average of neighbours) are not.
+    Where the cloud holds exact mirror pairs, their fit tightens step by step to the exact
+    plane, which steps to a local surface (an average of neighbours) do not reach; on a
+    surface without them the first fit is no tighter than the steps before, or moves less
+    than its error.
+
+    Returns ``(normal (3,), offset (), residuals (N,), nearest (N,), steps taken)``: the
+    whole cloud's residuals at the plane before the last step taken when that step moved
+    less than its error, else at the returned plane.
     """
-    keep = kept_pairs(points, dist, nn_idx, max_residual)
-    if int(keep.sum()) <= points.shape[1] + 1:
-        return normal, offset
-    p, q = points[keep], points[nn_idx[keep]]
-    if float(pair_fit_errors(p, q)[0]) >= se:
-        return normal, offset
-    n_new, b_new = plane_from_pairs(p, q)
-    return (n_new, b_new) if float((n_new * normal).sum()) >= 0 else (-n_new, -b_new)
+    dist, nn_idx = index.query(reflect_points(points, normal, offset))
+    for it in range(max_iters):
+        keep = kept_pairs(points, dist, nn_idx, max_residual)
+        if int(keep.sum()) <= points.shape[1] + 1:
+            return normal, offset, dist, nn_idx, it
+        p, q = points[keep], points[nn_idx[keep]]
+        se_pairs = float(pair_fit_errors(p, q)[0])
+        if se_pairs >= se:
+            return normal, offset, dist, nn_idx, it
+        n_new, b_new = plane_from_pairs(p, q)
+        if float((n_new * normal).sum()) < 0:
+            n_new, b_new = -n_new, -b_new
+        moved = float(plane_angle(n_new, normal))
+        normal, offset, se = n_new, b_new, se_pairs
+        if moved < se_pairs:
+            return normal, offset, dist, nn_idx, it + 1
+        dist, nn_idx = index.query(reflect_points(points, normal, offset))
+    return normal, offset, dist, nn_idx, max_iters
 
 
 def polish(
@@ -128,9 +145,9 @@ def polish(
     """Refine ``(normal, offset)`` on ``xs (N, 3)`` (``index`` over it): Algorithm 6 on every
     point when ``whole`` (the starts were refined on the whole cloud), pairs trimmed at the
     inlier tolerance; else :func:`surface_steps` from ``polish.n_queries`` random points,
-    then :func:`pairs_fit`. Then measure every point's mirror residual at the plane (on a
-    larger cloud, at the plane before the last step, which moves it by about a standard
-    error)."""
+    then :func:`pair_steps`. Then measure every point's mirror residual at the plane (on a
+    larger cloud, possibly at the plane before the last step, which moved it by less than
+    its standard error)."""
     iterations, converged = 0, False
     final = None
     full_spacing = None
@@ -145,11 +162,11 @@ def polish(
     elif settings.polish.enabled:
         queries = xs[random_subset(xs.shape[0], settings.polish.n_queries, generator)]
         normal, offset, iterations, converged, se = surface_steps(queries, xs, index, normal, offset, settings.polish)
-        final = index.query(reflect_points(xs, normal, offset))
         full_spacing = spacing(xs, index, generator, q=(settings.spacing_quantile, 0.5))
-        max_residual = settings.inlier_factor * full_spacing[0]
-        normal, offset = pairs_fit(xs, final[0], final[1], normal, offset, se, max_residual)
-        full_spacing = full_spacing[1]
+        normal, offset, dist, nn_idx, steps = pair_steps(
+            xs, index, normal, offset, se, settings.inlier_factor * full_spacing[0], settings.polish.max_iters
+        )
+        final, full_spacing, iterations = (dist, nn_idx), full_spacing[1], iterations + steps
     if final is None:
         final = index.query(reflect_points(xs, normal, offset))
     if full_spacing is None:
