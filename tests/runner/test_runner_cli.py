@@ -17,7 +17,7 @@ class TestRunCommand:
         cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "pointcloud_plane.yaml"
         out = tmp_path / "r.jsonl"
         args = ["run", str(cfg), "--inputs", str(tmp_path / "p*.xyz"), "--out", str(out), "--engine", "serial",
-                "--set", "n_starts=2", "--set", "polish.n_samples=300", "-q"]
+                "--set", "n_starts=2", "--set", "polish.n_queries=300", "-q"]
         assert main(args) == 0
         assert "2 inputs, 0 already done; ran 2 on the serial engine: 2 ok" in capsys.readouterr().out
         assert main(args) == 0  # resumed: nothing left

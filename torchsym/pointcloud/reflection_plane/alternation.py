@@ -14,7 +14,7 @@ from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_fro
 from torchsym.matching.knn import KNNIndex, mutual_nearest
 from torchsym.pointcloud.reflection_plane.settings import AlternationSettings
 
-__all__ = ["alternate", "fit_pairs", "lower_quantile", "remaining_factor", "step_tolerances"]
+__all__ = ["alternate", "fit_pairs", "kept_pairs", "lower_quantile", "remaining_factor", "step_tolerances"]
 
 #: quantile of the residuals that judges progress (extrapolation, stalls, the best plane)
 PROGRESS_QUANTILE = 0.25
@@ -85,7 +85,7 @@ def _evaluate(points: torch.Tensor, index: KNNIndex, normal: torch.Tensor, offse
     return d, j, lower_quantile(d, PROGRESS_QUANTILE)
 
 
-def _kept_pairs(points: torch.Tensor, dist: torch.Tensor, nn_idx: torch.Tensor, max_residual: float) -> torch.Tensor:
+def kept_pairs(points: torch.Tensor, dist: torch.Tensor, nn_idx: torch.Tensor, max_residual: float) -> torch.Tensor:
     """``(N,)`` bool: the pairs one step fits, mutual and trimmed (Algorithm 6, steps 6-8).
 
     Trimmed at the median residual of the mutual pairs, and at ``max_residual`` (widened
@@ -145,7 +145,7 @@ def alternate(
     stalled = 0
     prev_step = None
     for it in range(1, max_iters + 1):
-        keep = _kept_pairs(points, dist, nn_idx, max_residual)
+        keep = kept_pairs(points, dist, nn_idx, max_residual)
         center = 0.5 * (points[keep] + points[nn_idx[keep]]).mean(0)
         n_new, b_new = fit_pairs(points, nn_idx, keep, settings.update, center)
         if float((n_new * normal).sum()) < 0:

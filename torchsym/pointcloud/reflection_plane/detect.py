@@ -90,9 +90,11 @@ def detect_reflection_plane(
     normal, offset = search.best[0], search.best[1]
     t_refine = time.perf_counter()
 
-    # 3. Algorithm 6 from the winner on the whole cloud.
-    full_index = KNNIndex(xs) if subs.sub is not xs else subs.index
-    polished = polish(xs, full_index, normal, offset, settings, gen)
+    # 3. The winner refined against the whole cloud: Algorithm 6 when the subsample is the
+    #    whole cloud, else coarse-to-fine steps to its surface.
+    whole = subs.sub is xs
+    full_index = subs.index if whole else KNNIndex(xs)
+    polished = polish(xs, full_index, normal, offset, settings, gen, whole=whole)
     normal, offset, dist, nn_idx = polished.normal, polished.offset, polished.dist, polished.nn_idx
     tol = settings.inlier_factor * max(polished.spacing, 1e-12)
 

@@ -86,10 +86,18 @@ class AlternationSettings(Settings):
 
 @dataclasses.dataclass(frozen=True)
 class PolishSettings(Settings):
-    """Algorithm 6 from the winning start on the whole cloud (thesis Sec. 5.2.3)."""
+    """The winning start refined against the whole cloud: Algorithm 6 on a cloud no larger
+    than the subsample (thesis Sec. 5.2.3); Gauss-Newton steps to its surface, coarse to
+    fine, on a larger one (an extension)."""
 
     enabled: bool = setting(True, "run the polish (else the subsample's fit is returned)")
-    n_samples: int = setting(100000, "points it runs on (a random subset of larger clouds)", low=4)
+    n_queries: int = setting(5000, "points whose mirror images the steps on a larger cloud fit", low=4)
+    n_neighbors: int = setting(10, "nearest points whose centroid and local plane a mirror image is matched to", low=3)
+    max_iters: int = setting(8, "Gauss-Newton steps on a larger cloud", low=1)
+    tol_se: float = setting(
+        1.0, "... until the normal moves less than this many standard errors of the step's fit",
+        unit="x standard error", low=0.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
