@@ -30,6 +30,16 @@ class TestResultsStore:
         assert [(r["input"], r["status"]) for r in read_results(out)] == [("a", "ok"), ("b", "ok")]
         assert len(read_results(out, latest=False)) == 3
 
+    def test_keeps_no_results_in_memory(self, tmp_path):
+        # a long run's records can hold per-point arrays: the store keeps keys and statuses only
+        out = tmp_path / "r.jsonl"
+        with ResultsStore(out) as store:
+            store.append(_rec("a", attempts=2))
+            assert store.latest("a") == {"input": "a", "size": 1, "mtime_ns": 2, "config_hash": "h", "status": "ok", "attempts": 2}
+        with ResultsStore(out) as store:  # the same when reopened
+            assert "result" not in store.latest("a") and store.latest("a")["attempts"] == 2
+        assert read_results(out)[0]["result"] == {"x": 1.0}
+
     def test_nan_written_as_null(self, tmp_path):
         out = tmp_path / "r.jsonl"
         with ResultsStore(out) as store:

@@ -28,7 +28,7 @@ import fcntl
 import hashlib
 import json
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -70,34 +70,41 @@ def input_key(path: str | Path, config_digest: str) -> InputKey:
     return InputKey(str(p), int(st.st_size), int(st.st_mtime_ns), config_digest)
 
 
-def _parse_lines(path: Path) -> tuple[list[dict[str, Any]], int]:
-    """Records of the file and the byte length of its intact part (to cut a torn last line).
+def _parse_lines(path: Path, keep: Callable[[dict[str, Any]], dict[str, Any]] | None = None) -> tuple[list[dict[str, Any]], int]:
+    """Records of the file (each passed through ``keep`` if given, so that only what is
+    kept stays in memory) and the byte length of its intact part (to cut a torn last
+    line). The file is read a line at a time.
 
     Raises:
         InputFileError: a line other than the last is not a JSON record.
     """
-    data = path.read_bytes()
     records: list[dict[str, Any]] = []
     good = 0
-    pos = 0
-    while pos < len(data):
-        end = data.find(b"\n", pos)
-        line = data[pos:] if end < 0 else data[pos:end]
-        try:
-            rec = json.loads(line) if line.strip() else None
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            rec = False
-        last = end < 0 or end == len(data) - 1
-        if rec is False or (rec is not None and not isinstance(rec, dict)) or end < 0:
-            if last:
-                break  # torn last line (no newline, or cut inside the JSON): dropped
-            lineno = data.count(b"\n", 0, pos) + 1
-            raise InputFileError(f"results: line {lineno} of {str(path)!r} is not a JSON record; the file is not a torchsym results file")
-        if rec is not None:
-            records.append(rec)
-        pos = end + 1
-        good = pos
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        lineno = 0
+        while line := fh.readline():
+            lineno += 1
+            try:
+                rec = json.loads(line) if line.strip() else None
+            except (json.JSONDecodeError, UnicodeDecodeError):
+                rec = False
+            complete = line.endswith(b"\n")
+            if rec is False or (rec is not None and not isinstance(rec, dict)) or not complete:
+                if not complete or fh.tell() >= size:
+                    break  # torn last line (no newline, or cut inside the JSON): dropped
+                raise InputFileError(
+                    f"results: line {lineno} of {str(path)!r} is not a JSON record; the file is not a torchsym results file"
+                )
+            if rec is not None:
+                records.append(rec if keep is None else keep(rec))
+            good = fh.tell()
     return records, good
+
+
+def _summary(record: Mapping[str, Any]) -> dict[str, Any]:
+    """What the store keeps of a record: its key fields, status and attempts (not the result)."""
+    return {name: record.get(name) for name in (*InputKey.__dataclass_fields__, "status", "attempts") if name in record}
 
 
 def read_results(path: str | Path, *, latest: bool = True) -> list[dict[str, Any]]:
@@ -179,7 +186,7 @@ class ResultsStore:
         self._lock_fd = fd
         try:
             if self.resume and self.path.is_file():
-                records, good = _parse_lines(self.path)
+                records, good = _parse_lines(self.path, _summary)
                 size = self.path.stat().st_size
                 if good < size:  # cut the torn last line
                     self.torn_bytes = size - good
@@ -204,7 +211,8 @@ class ResultsStore:
             self._lock_fd = None
 
     def latest(self, input: str) -> dict[str, Any] | None:
-        """The latest record of ``input`` (its resolved path), or None."""
+        """The key fields, status and attempts of ``input``'s latest record (its resolved
+        path), or None; the store keeps no results in memory (:func:`read_results` reads them)."""
         return self._latest.get(input)
 
     def is_done(self, key: InputKey) -> bool:
@@ -225,4 +233,4 @@ class ResultsStore:
         self._fh.write(line + "\n")
         self._fh.flush()
         os.fsync(self._fh.fileno())
-        self._latest[str(record.get("input"))] = dict(record)
+        self._latest[str(record.get("input"))] = _summary(record)
