@@ -317,7 +317,7 @@ def _markdown(res: dict[str, Any]) -> str:
         f"Driver killed (SIGKILL, with its local cluster) after {d['records_before_kill']} of {d['n']} no-op tasks "
         f"({d['torn_bytes']} torn bytes cut): the resumed run skipped {d['skipped_on_resume']} and ran "
         f"{d['run_on_resume']}; {d['missing']} inputs missing, {d['duplicate_records']} duplicate records, "
-        f"{d['tasks_run_twice']} tasks run twice (those in flight at the kill; at most 4: two per worker).",
+        f"{d['tasks_run_twice']} tasks run twice (those in flight at the kill: two tasks per worker, each up to 16 quick inputs).",
         "",
         "Scores of the runs (`torchsym evaluate`):",
         "",

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import torch
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -28,6 +29,15 @@ CASES = [
         marks=pytest.mark.slow,
     ),
 ]
+
+
+@pytest.fixture(autouse=True)
+def _torch_state():
+    """An example may set torch's thread count or global seed: restored for the tests after it."""
+    threads, rng = torch.get_num_threads(), torch.get_rng_state()
+    yield
+    torch.set_num_threads(threads)
+    torch.set_rng_state(rng)
 
 
 @pytest.mark.parametrize(("name", "args", "pictures"), CASES)

@@ -224,4 +224,4 @@ class TestPairFitErrors:
             ses.append(float(pair_fit_errors(p, q)[0]))
         rms = math.sqrt(sum(a * a for a in angles) / len(angles))  # two directions of error
         se = sum(ses) / len(ses)
-        assert 0.5 * se < rms < 2.0 * math.sqrt(2.0) * se
+        assert 0.8 * math.sqrt(2.0) * se < rms < 1.25 * math.sqrt(2.0) * se

@@ -101,7 +101,7 @@ SCORE_MODES = [
     (boundary_clique_axes, {"score": "support", "edges": {"detector": "canny"}, "theta": 5.0}),
     (boundary_clique_axes, {"score": "photometric"}),
     (ksymmetry_axes, {}),
-    (ksymmetry_axes, {"score": "gradient"}),
+    (ksymmetry_axes, {"score": "support"}),
 ]
 
 

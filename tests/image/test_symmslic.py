@@ -212,7 +212,7 @@ class TestSuperpixelMetrics:
 def test_refine_axis_photometric_recovers_the_axis():
     """On an exactly mirrored image, a detuned axis (1 degree, 3 px) refined on its edges
     comes back to the true one."""
-    from torchsym.image.symmslic.pairs import refine_axis_photometric
+    from torchsym.image.symmslic.pairs import intensity_stack, refine_axis_photometric
     from torchsym.image.synthetic import mirrored_texture_image
 
     img, axis = mirrored_texture_image(height=240, width=320, angle=30.0, generator=torch.Generator().manual_seed(3))
@@ -229,7 +229,7 @@ def test_refine_axis_photometric_recovers_the_axis():
     t = math.atan2(float(axis[1]), float(axis[0])) + math.radians(1.0)
     n0 = torch.tensor([math.cos(t), math.sin(t)], dtype=torch.float64)
     centre = torch.tensor([159.5, 119.5], dtype=torch.float64)
-    normal, offset = refine_axis_photometric(gray, pts, grads, n0, -(n0 @ centre) + 3.0)
+    normal, offset = refine_axis_photometric(intensity_stack(gray), pts, grads, n0, -(n0 @ centre) + 3.0)
     assert abs(float(normal @ axis[:2])) > math.cos(math.radians(0.05))
     assert abs(float(normal @ centre + offset)) < 0.3
 
@@ -252,3 +252,15 @@ def test_symmetric_region_grows_through_mirrored_colour():
     assert 0 < (hull >= 0).mean() < 0.05
     assert (grown >= 0).mean() > 0.99
     np.testing.assert_array_equal(flat, hull)
+
+
+def test_refine_axis_photometric_keeps_the_start_without_gain():
+    """On a flat image nothing lowers the cost: the start comes back unchanged."""
+    from torchsym.image.symmslic.pairs import intensity_stack, refine_axis_photometric
+
+    stack = intensity_stack(torch.full((60, 80), 0.5, dtype=torch.float64))
+    pts = torch.tensor([[20.0, 30.0], [25.0, 10.0], [30.0, 40.0]], dtype=torch.float64)
+    grads = torch.tensor([[1.0, 0.0]] * 3, dtype=torch.float64)
+    n0, b0 = torch.tensor([1.0, 0.0], dtype=torch.float64), torch.tensor(-40.0, dtype=torch.float64)
+    normal, offset = refine_axis_photometric(stack, pts, grads, n0, b0)
+    assert normal is n0 and offset is b0

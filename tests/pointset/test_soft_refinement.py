@@ -65,6 +65,7 @@ class TestInPointSymm:
         on, off = point_symm(s.points), point_symm(s.points, soft={"enabled": False})
         assert on.normal.shape == off.normal.shape == (3,)
         assert float(plane_angle(on.normal, s.normal)) < np.radians(3.0)
+        assert not torch.equal(on.normal, off.normal)  # the switch reaches the solver
 
     def test_exact_symmetry_same_bits(self):
         s = planted(50, 3, 0.0, 5)

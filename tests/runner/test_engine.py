@@ -2,6 +2,7 @@
 started scheduler with two workers reached by its address. Slow: starting workers, and
 restarting the ones the probe kills, imports torch each time."""
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +40,7 @@ class TestLocalCluster:
         # resuming runs the crashed input again, nothing else (the auto engine: serial, one input left)
         assert run(probe_config(markers), str(folder), out, imports=[PROBE], engine="local").n_skipped == 4
 
-    def test_batches_split_when_their_worker_dies(self, tmp_path, markers):
+    def test_batches_split_when_their_worker_dies(self, tmp_path, markers, caplog):
         # quick inputs share tasks once the first ones are timed; the input that kills its
         # worker every time sits among them, and only it is blamed
         folder = tmp_path / "in"
@@ -47,8 +48,10 @@ class TestLocalCluster:
         for i in range(24):
             write_cloud(folder / f"c{i:02d}.xyz", i, 666 if i == 20 else None)
         out = tmp_path / "r.jsonl"
+        caplog.set_level(logging.DEBUG, logger="torchsym.runner.engine")
         summary = run(probe_config(markers), str(folder), out, engine="local", workers=2, retries=1, imports=[PROBE])
         assert (summary.n_ok, summary.n_crashed) == (23, 1)
+        assert any(r.message.startswith("batch of ") for r in caplog.records)  # inputs did share tasks
         rec = _by_name(out)
         assert rec["c20.xyz"]["status"] == "crashed" and rec["c20.xyz"]["attempts"] == 2
         assert {r["attempts"] for name, r in rec.items() if name != "c20.xyz"} == {1}

@@ -24,6 +24,7 @@ __all__ = [
     "choose_k1",
     "elbow_index",
     "mirror_distance_matrix",
+    "mirror_sift_distances",
     "mirror_sift_knn",
     "mutual_knn_pairs",
     "nearest_mirrors",
@@ -83,30 +84,40 @@ def nearest_mirrors(dist: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Ten
     return rows[ok], idx[ok], vals[ok]
 
 
-def mirror_sift_knn(
-    image: torch.Tensor, *, num_features: int = 1000, k: int = 3, min_pair_distance: float = 5.0
-) -> tuple[SiftFeatures, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """SIFT keypoints of ``image`` and each one's ``k`` nearest mirrored-SIFT matches.
+def mirror_sift_distances(
+    image: torch.Tensor, *, num_features: int = 1000, min_pair_distance: float = 5.0, backend: str = "kornia"
+) -> tuple[SiftFeatures, torch.Tensor | None]:
+    """SIFT keypoints of ``image`` (:func:`~torchsym.features.sift.detect_sift`, ``backend``)
+    and the ``(N, N)`` mirrored-descriptor distances :func:`mirror_distance_matrix` gives in
+    the descriptors' own layout (keypoints closer than ``min_pair_distance`` pixels not
+    matched); None with fewer than two keypoints."""
+    feats = detect_sift(image, num_features=num_features, backend=backend)
+    if len(feats) < 2:
+        return feats, None
+    return feats, mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance, layout=feats.layout)
 
-    Keypoints and descriptors by :func:`~torchsym.features.sift.detect_sift`, distances
-    ``|m_j - d_i|`` by :func:`mirror_distance_matrix` (keypoints closer than
-    ``min_pair_distance`` pixels are not matched), matches by :func:`nearest_mirrors`.
+
+def mirror_sift_knn(
+    image: torch.Tensor, *, num_features: int = 1000, k: int = 3, min_pair_distance: float = 5.0, backend: str = "kornia"
+) -> tuple[SiftFeatures, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """SIFT keypoints of ``image`` and each one's ``k`` nearest mirrored-SIFT matches
+    (:func:`mirror_sift_distances`, then :func:`nearest_mirrors`).
 
     Args:
         image: ``(C, H, W)`` or ``(1, C, H, W)`` float image in [0, 1].
         num_features: the most SIFT keypoints.
         k: matches per keypoint.
         min_pair_distance: pixels.
+        backend: SIFT's, ``"kornia"`` or ``"opencv"``.
 
     Returns:
         The features, and ``i (M,)``, ``j (M,)``, ``distance (M,)`` as
         :func:`nearest_mirrors` gives them (empty with fewer than two keypoints).
     """
-    feats = detect_sift(image, num_features=num_features)
-    if len(feats) < 2:
+    feats, dist = mirror_sift_distances(image, num_features=num_features, min_pair_distance=min_pair_distance, backend=backend)
+    if dist is None:
         none = torch.zeros(0, dtype=torch.int64, device=feats.points.device)
         return feats, none, none, torch.zeros(0, device=feats.points.device)
-    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance)  # (N, N)
     return (feats, *nearest_mirrors(dist, k))
 
 

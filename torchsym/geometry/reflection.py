@@ -246,12 +246,13 @@ def pair_fit_errors(
     """Standard errors of the least-squares reflection :func:`plane_from_pairs` fits to
     the pairs ``points, mirrors (..., N, D)`` (``weights (..., N)``, default 1).
 
-    With ``l_1 <= l_2`` the two smallest eigenvalues of the fit's matrix, the residual
-    energy per pair is ``s^2 = l_1 / (m - D)`` (``m``: the effective number of pairs,
-    ``(sum w)^2 / sum w^2``), and on the unit sphere the energy rises as
-    ``(l_2 - l_1) t^2`` along the least determined direction, so the normal's standard
-    error is ``sqrt(s^2 / (l_2 - l_1))`` radians and the offset's ``sqrt(s^2 / sum w)``
-    (the usual Gauss-Newton covariance of a least-squares fit).
+    With ``l_1 <= l_2`` the two smallest eigenvalues of the fit's matrix (the energy
+    ``l_1 = 1/4 sum w |S p - q|^2``, ``D`` residual coordinates a pair), the residual
+    energy per coordinate is ``s^2 = l_1 / (D m - D)`` (``m``: the effective number of
+    pairs, ``(sum w)^2 / sum w^2``; ``D`` parameters fitted), and on the unit sphere the
+    energy rises as ``(l_2 - l_1) t^2`` along the least determined direction, so the
+    normal's standard error is ``sqrt(s^2 / (l_2 - l_1))`` radians and the offset's
+    ``sqrt(s^2 / sum w)`` (the usual Gauss-Newton covariance of a least-squares fit).
 
     Returns:
         ``angle (...)`` in radians and ``offset (...)`` in the points' units.
@@ -263,7 +264,7 @@ def pair_fit_errors(
     tiny = torch.finfo(points.dtype).tiny
     wsum = w.sum(-1).clamp_min(tiny)
     m_eff = wsum**2 / (w * w).sum(-1).clamp_min(tiny)
-    var = lams[..., 0].clamp_min(0) / (m_eff - d).clamp_min(1.0) * (wsum / m_eff)  # per unit weight
+    var = lams[..., 0].clamp_min(0) / (d * m_eff - d).clamp_min(1.0) * (wsum / m_eff)  # per coordinate and unit weight
     angle = (var / (lams[..., 1] - lams[..., 0]).clamp_min(tiny)).sqrt()
     return angle, (var / wsum).sqrt()
 

@@ -45,7 +45,7 @@ def working_copy(img: torch.Tensor, max_side: int | None, min_side: int | None =
     src = img if img.dtype in (torch.float32, torch.float64) else img.float()  # antialias: float32/64 only
     shrink = size[0] < height or size[1] < width
     out = torch.nn.functional.interpolate(src, size=size, mode="bilinear", align_corners=False, antialias=shrink)
-    return out if shrink else out.clamp(0, 1)
+    return out
 
 
 def to_input_pixels(res: ReflectionAxesResult, height: int, width: int) -> ReflectionAxesResult:

@@ -5,8 +5,7 @@ from __future__ import annotations
 import torch
 
 from torchsym.core.checks import check_int, check_positive
-from torchsym.features.mirror_pairs import choose_k1, mirror_distance_matrix, mutual_knn_pairs
-from torchsym.features.sift import detect_sift
+from torchsym.features.mirror_pairs import choose_k1, mirror_sift_distances, mutual_knn_pairs
 
 __all__ = ["mirror_sift_pairs"]
 
@@ -35,10 +34,9 @@ def mirror_sift_pairs(
     min_pair_distance = check_positive(min_pair_distance, "min_pair_distance", allow_zero=True)
     if k1 is not None:
         k1 = check_int(k1, "k1", minimum=1)
-    feats = detect_sift(image, num_features=max_keypoints, backend=backend)
-    if len(feats) < 2:
+    feats, dist = mirror_sift_distances(image, num_features=max_keypoints, min_pair_distance=min_pair_distance, backend=backend)
+    if dist is None:
         return torch.zeros(0, 4, dtype=torch.float64, device=feats.points.device), 0
-    dist = mirror_distance_matrix(feats.descriptors, feats.points, min_distance=min_pair_distance, layout=feats.layout)
     if k1 is None:
         k1 = choose_k1(dist)
     idx = mutual_knn_pairs(dist, k1)  # (P, 2)

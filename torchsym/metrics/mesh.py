@@ -214,7 +214,6 @@ def extremity_vertices(
     nearest = np.full(n, np.inf)
     for _ in range(min(n_sources, n)):  # farthest-point sources, spread evenly over the surface
         row = geodesic_distances(graph, np.array([source]))[0]  # (V,)
-        row[~np.isfinite(row)] = np.inf
         rows.append(row)
         nearest = np.minimum(nearest, row)
         finite = np.where(np.isfinite(nearest), nearest, -1.0)

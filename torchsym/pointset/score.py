@@ -26,14 +26,22 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["chance_evidence", "mirror_evidence", "symmetry_score"]
+__all__ = ["chance_evidence", "mirror_evidence", "nearest_other", "symmetry_score"]
 
 #: random planes of the chance level
 N_CHANCE_PLANES = 32
 
 
+def nearest_other(points: np.ndarray, tree: cKDTree | None = None) -> np.ndarray:
+    """``(N,)`` distance from each of ``points (N, D)`` to its nearest other point."""
+    x = np.asarray(points, dtype=np.float64)
+    tree = cKDTree(x) if tree is None else tree
+    return tree.query(x, k=2)[0][:, 1]
+
+
 def mirror_evidence(
-    points: np.ndarray, reflected: np.ndarray, mirror: np.ndarray, *, tree: cKDTree | None = None
+    points: np.ndarray, reflected: np.ndarray, mirror: np.ndarray, *, tree: cKDTree | None = None,
+    nn: np.ndarray | None = None,
 ) -> np.ndarray:
     """Per-point evidence ``max(0, 1 - r_i / min(nn_i, d_i))`` in [0, 1].
 
@@ -42,6 +50,7 @@ def mirror_evidence(
         reflected: ``(N, D)`` their reflections ``x_i'``.
         mirror: ``(N,)`` int, the index of each point's mirror, -1 where unmatched.
         tree: a :class:`cKDTree` of ``points`` to reuse.
+        nn: :func:`nearest_other` of ``points``, to reuse.
 
     Returns:
         ``(N,)`` float64; an exact mirror (``r_i = 0``) counts 1 even on the plane.
@@ -52,8 +61,7 @@ def mirror_evidence(
     out = np.zeros(n)
     if n < 2:
         return out
-    tree = cKDTree(x) if tree is None else tree
-    nn = tree.query(x, k=2)[0][:, 1]  # (N,) nearest other point
+    nn = nearest_other(x, tree) if nn is None else np.asarray(nn)  # (N,)
     matched = np.asarray(mirror) >= 0
     m = np.asarray(mirror)[matched]
     r = np.linalg.norm(y[matched] - x[m], axis=1)
@@ -65,7 +73,8 @@ def mirror_evidence(
 
 
 def chance_evidence(
-    points: np.ndarray, rng: np.random.Generator, *, n_planes: int = N_CHANCE_PLANES, tree: cKDTree | None = None
+    points: np.ndarray, rng: np.random.Generator, *, n_planes: int = N_CHANCE_PLANES, tree: cKDTree | None = None,
+    nn: np.ndarray | None = None,
 ) -> float:
     """``q_0``: the mean :func:`mirror_evidence` of ``points (N, D)`` under ``n_planes`` planes
     through the centroid with normals uniform on the sphere (from ``rng``), each point's mirror
@@ -75,6 +84,7 @@ def chance_evidence(
     if n < 2:
         return 0.0
     tree = cKDTree(x) if tree is None else tree
+    nn = nearest_other(x, tree) if nn is None else nn
     centre = x.mean(0)
     total = 0.0
     for _ in range(n_planes):
@@ -83,7 +93,7 @@ def chance_evidence(
         y = x - 2.0 * ((x - centre) @ normal)[:, None] * normal  # (N, D)
         _, idx = tree.query(y, k=2)
         mirror = np.where(idx[:, 0] != np.arange(n), idx[:, 0], idx[:, 1])
-        total += float(mirror_evidence(x, y, mirror, tree=tree).mean())
+        total += float(mirror_evidence(x, y, mirror, tree=tree, nn=nn).mean())
     return total / n_planes
 
 
@@ -98,6 +108,7 @@ def symmetry_score(
     if x.shape[0] < 2:
         return 0.0
     tree = cKDTree(x) if tree is None else tree
-    q = float(mirror_evidence(x, reflected, mirror, tree=tree).mean())
-    q0 = min(chance_evidence(x, rng, tree=tree), 1.0 - 1e-12)
+    nn = nearest_other(x, tree)
+    q = float(mirror_evidence(x, reflected, mirror, tree=tree, nn=nn).mean())
+    q0 = min(chance_evidence(x, rng, tree=tree, nn=nn), 1.0 - 1e-12)
     return float(min(1.0, max(0.0, (q - q0) / (1.0 - q0))))

@@ -32,6 +32,7 @@ import torch
 from scipy.spatial import cKDTree
 
 from torchsym.geometry import plane_from_pairs
+from torchsym.optim.convergence import remaining_factor
 
 __all__ = ["SoftPlane", "normal_standard_error", "soft_refine_plane"]
 
@@ -154,20 +155,9 @@ def soft_refine_plane(
         step = new_normal - normal
         normal, offset = new_normal, new_offset
         moved = 2.0 * float(np.arcsin(min(1.0, 0.5 * float(np.linalg.norm(step)))))  # radians
-        ahead = _remaining_factor(step, previous)
+        ahead = remaining_factor(step, previous, max_ratio=_MAX_STEP_RATIO)
         previous = step
         if moved * ahead <= tol_se * normal_standard_error(x[a], x[c], weight, s2):
             converged = True
             break
     return SoftPlane(normal, offset, s2, it, converged)
-
-
-def _remaining_factor(step: np.ndarray, previous: np.ndarray | None) -> float:
-    """``1 / (1 - r)``, ``r`` the last ``step`` over the ``previous`` one projected on it,
-    clipped to [0, 0.95]: how far a linearly converging sequence still goes in units of its
-    last step (1 without a previous step)."""
-    if previous is None:
-        return 1.0
-    denom = float(previous @ previous)
-    r = float(step @ previous) / denom if denom > 0 else 0.0
-    return 1.0 / (1.0 - min(max(r, 0.0), _MAX_STEP_RATIO))

@@ -204,9 +204,11 @@ class _Flying:
     future: Any
 
 
-def run_batch(specs: Sequence[TaskSpec]) -> list[dict[str, Any]]:
-    """:func:`~torchsym.runner.task.run_task` on each spec in turn (one Dask task)."""
-    return [run_task(spec) for spec in specs]
+def run_batch(specs: Sequence[TaskSpec]) -> tuple[list[dict[str, Any]], float]:
+    """:func:`~torchsym.runner.task.run_task` on each spec in turn (one Dask task); returns
+    the outcomes and the batch's wall seconds (pictures included, which size the batches)."""
+    t0 = time.perf_counter()
+    return [run_task(spec) for spec in specs], time.perf_counter() - t0
 
 
 def _take(queue: collections.deque[_Item], size: int) -> tuple[_Item, ...]:
@@ -233,7 +235,10 @@ def dask_outcomes(
     submitted again as it was. A running batch is split and its inputs submitted again
     one per task, uncounted; a running single input counts an attempt and runs again, up
     to ``retries`` times, then yields a ``"crashed"`` outcome. So ``attempts`` counts the
-    runs of an input as a task of its own.
+    runs of an input as a task of its own. A batch that fails otherwise (its result cannot
+    come back) is split the same way; a single input gets that failure as its ``"error"``.
+    With several threads per worker, every task running beside the one that killed it
+    counts an attempt.
 
     Raises:
         EngineError: no worker for ``wait_workers`` seconds.
@@ -256,6 +261,8 @@ def dask_outcomes(
             fut = client.submit(run_batch, specs_n, key=f"torchsym-{token}-{specs_n[0].index}-{n}", pure=False, retries=0, priority=-n)
             flying[fut.key] = _Flying(items, n, fut)
             done.add(fut)
+            if len(items) > 1:
+                logger.debug("batch of %d inputs in task %s", len(items), fut.key)
         if not flying:  # every worker is gone: wait for one (a nanny restarts them)
             try:
                 client.wait_for_workers(1, timeout=wait_workers)
@@ -282,14 +289,19 @@ def dask_outcomes(
                         logger.warning("%s: its worker died (attempt %d); to run again", spec.input, attempt)
                         queue.appendleft((spec, attempt + 1, True))
                     else:
-                        yield spec, _crashed(attempt, exc), attempt
+                        yield spec, _crashed(attempt, task.future.exception()), attempt
             fut.release()
             continue
         task = flying.pop(fut.key)
         fut.release()
-        # the task's result could not come back: each input's error (an error comes as (type, exc, tb))
-        outcomes = value if exc is None else [_error_outcome(exc)] * len(task.items)
-        seconds += sum(o["seconds"] for o in outcomes)
+        if exc is not None and len(task.items) > 1:  # a batch failed outside its inputs: each runs alone
+            queue.extendleft((spec, attempt, True) for spec, attempt, _ in reversed(task.items))
+            continue
+        if exc is not None:  # the task's result could not come back (an error comes as (type, exc, tb))
+            yield task.items[0][0], _error_outcome(exc), task.items[0][1]
+            continue
+        outcomes, wall = value
+        seconds += wall
         finished += len(outcomes)
         size = max(1, min(MAX_BATCH, int(BATCH_SECONDS * finished / max(seconds, 1e-6))))
         for (spec, attempt, _), outcome in zip(task.items, outcomes, strict=True):

@@ -29,7 +29,7 @@ import torch.nn.functional as F
 from torchsym.image.boundary import boundary_curves
 from torchsym.image.symmslic.settings import MirrorPairSettings
 
-__all__ = ["MirrorPixelPairs", "curve_samples", "mirror_pixel_pairs", "refine_axis_photometric", "reflect_2d"]
+__all__ = ["MirrorPixelPairs", "curve_samples", "intensity_stack", "mirror_pixel_pairs", "refine_axis_photometric", "reflect_2d"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -118,16 +118,22 @@ def _support(matched: torch.Tensor, inside: torch.Tensor) -> float:
     return float(matched.sum()) / int(inside.sum()) if int(inside.sum()) >= 2 else 0.0
 
 
+def intensity_stack(gray: torch.Tensor) -> torch.Tensor:
+    """``(1, 3, H, W)`` float64 stack of ``gray (H, W)`` and its x and y derivatives (central
+    differences), sampled by :func:`refine_axis_photometric`."""
+    gy, gx = torch.gradient(gray.double())
+    return torch.stack([gray.double(), gx, gy])[None]
+
+
 def refine_axis_photometric(
-    gray: torch.Tensor, points: torch.Tensor, grads: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor, n_iters: int = 8
+    stack: torch.Tensor, points: torch.Tensor, grads: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor, n_iters: int = 8
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """The axis refined so that the image across the edges at ``points (N, 2)`` (unit
     gradients ``grads``; profiles of 7 px along them) matches the image at their
-    reflections: Gauss-Newton on the grey-level differences of ``gray (H, W)``,
-    Cauchy-weighted."""
-    h, w = gray.shape
-    gy, gx = torch.gradient(gray)
-    stack = torch.stack([gray, gx, gy])[None].double()  # (1, 3, H, W)
+    reflections: Gauss-Newton on the grey-level differences of the image in ``stack``
+    (:func:`intensity_stack`), Cauchy-weighted. The refined axis is returned only if it
+    lowers the Cauchy cost of the start, else the start."""
+    h, w = stack.shape[-2:]
 
     def sample(xy: torch.Tensor) -> torch.Tensor:
         grid = torch.stack([xy[:, 0] / (w - 1) * 2 - 1, xy[:, 1] / (h - 1) * 2 - 1], -1)[None, None]
@@ -136,17 +142,24 @@ def refine_axis_photometric(
     t = torch.arange(-3, 4, dtype=torch.float64)
     pts = (points[:, None] + t[None, :, None] * grads[:, None]).reshape(-1, 2)
     base = sample(pts)[:, 0]
-    theta = torch.atan2(normal[1], normal[0])
-    b = offset.clone()
     scale = float(base.std()) * 0.2 + 1e-6
+
+    def residuals(theta: torch.Tensor, b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        n = torch.stack([torch.cos(theta), torch.sin(theta)])
+        d = pts @ n + b
+        v = sample(pts - 2.0 * d[:, None] * n)
+        return v[:, 0] - base, v[:, 1:], d
+
+    def cost(r: torch.Tensor) -> float:
+        return float(torch.log1p((r / scale) ** 2).sum())
+
+    theta0 = torch.atan2(normal[1], normal[0])
+    theta, b = theta0, offset.clone()
+    r, gimg, d = residuals(theta, b)
+    start_cost = cost(r)
     for _ in range(n_iters):
         n = torch.stack([torch.cos(theta), torch.sin(theta)])
         dn = torch.stack([-torch.sin(theta), torch.cos(theta)])
-        d = pts @ n + b
-        refl = pts - 2.0 * d[:, None] * n
-        v = sample(refl)
-        r = v[:, 0] - base
-        gimg = v[:, 1:]
         j_theta = (gimg * (-2.0 * (pts @ dn)[:, None] * n - 2.0 * d[:, None] * dn)).sum(1)
         j_b = -2.0 * (gimg @ n)
         wts = 1.0 / (1.0 + (r / scale) ** 2)
@@ -154,6 +167,9 @@ def refine_axis_photometric(
         lhs = jac.T @ (wts[:, None] * jac) + 1e-9 * torch.eye(2, dtype=jac.dtype)
         step = torch.linalg.solve(lhs, -(jac.T @ (wts * r)))
         theta, b = theta + step[0], b + step[1]
+        r, gimg, d = residuals(theta, b)
+    if not cost(r) < start_cost:
+        return normal, offset
     return torch.stack([torch.cos(theta), torch.sin(theta)]), b
 
 
@@ -197,8 +213,9 @@ def mirror_pixel_pairs(
         return empty
     x = torch.from_numpy(centres).float()  # (N, 2)
     cv = torch.from_numpy(curves).float()  # (N, S, 2)
-    gy, gx = np.gradient(image.float().mean(0).cpu().numpy())
-    gray = torch.from_numpy(image.float().mean(0).cpu().numpy()).double()  # (H, W)
+    gray_np = image.float().mean(0).cpu().numpy()  # (H, W)
+    gy, gx = np.gradient(gray_np)
+    stack = intensity_stack(torch.from_numpy(gray_np))  # for the photometric refinement of each axis
     grad = F.normalize(torch.from_numpy(np.stack([gx, gy], -1)).float(), dim=-1)  # (H, W, 2) unit gradients
     g = grad[x[:, 1].round().long().clamp(0, h - 1), x[:, 0].round().long().clamp(0, w - 1)]  # (N, 2)
     edges = torch.from_numpy(np.concatenate([np.asarray(c, dtype=np.float64) for c in chains]))  # (E, 2) every chain pixel
@@ -244,7 +261,7 @@ def mirror_pixel_pairs(
         offset = -(0.5 * (p + q) @ normal).median()
         m, _ = _matches(x.double(), g.double(), p, q, normal, offset)
         if int(m.sum()) >= 3:  # the axis refined on the edges that have a mirror edge
-            normal, offset = refine_axis_photometric(gray, x.double()[m], g.double()[m], normal, offset)
+            normal, offset = refine_axis_photometric(stack, x.double()[m], g.double()[m], normal, offset)
         m, inside = _matches(edges, edge_grads, p, q, normal, offset, radius=1.5)
         if _support(m, inside) < s.min_support:
             continue

@@ -12,9 +12,10 @@ import torch
 
 from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, plane_from_reflection, reflect_points
 from torchsym.matching.knn import KNNIndex, mutual_nearest
+from torchsym.optim.convergence import remaining_factor
 from torchsym.pointcloud.reflection_plane.settings import AlternationSettings
 
-__all__ = ["alternate", "fit_pairs", "kept_pairs", "lower_quantile", "remaining_factor", "step_tolerances"]
+__all__ = ["alternate", "fit_pairs", "kept_pairs", "lower_quantile", "step_tolerances"]
 
 #: quantile of the residuals that judges progress (extrapolation, stalls, the best plane)
 PROGRESS_QUANTILE = 0.25
@@ -66,19 +67,6 @@ def step_tolerances(
     return max(tol_angle, tol_se * math.degrees(float(se_angle))), max(tol_offset, tol_se * float(se_offset))
 
 
-def remaining_factor(step: torch.Tensor, previous: torch.Tensor | None) -> float:
-    """``1 / (1 - r)``: how far a linearly converging sequence still goes, in units of its
-    last ``step (3,)`` (normal change), with ``r`` the ratio of ``step`` to the ``previous``
-    one projected on it, clipped to [0, 0.95]; 1 without a previous step. Nearest-neighbour
-    steps creep by near-constant amounts (r near 1); a step below the tolerance then does
-    not mean the plane has arrived."""
-    if previous is None:
-        return 1.0
-    denom = float(previous @ previous)
-    r = float(step @ previous) / denom if denom > 0 else 0.0
-    return 1.0 / (1.0 - min(max(r, 0.0), 0.95))
-
-
 def _evaluate(points: torch.Tensor, index: KNNIndex, normal: torch.Tensor, offset: torch.Tensor):
     """Residuals ``(N,)``, nearest indices ``(N,)`` and progress residual of a plane."""
     d, j = index.query(reflect_points(points, normal, offset))
@@ -126,7 +114,7 @@ def alternate(
     residual (lower quartile of the residuals) falls. Ends when a step moves the normal
     less than ``tol_angle`` degrees and the offset less than ``tol_offset``, or (when larger)
     than ``tol_se`` standard errors of the fit (:func:`step_tolerances`), the step counted
-    with what a linearly converging sequence still has to go (:func:`remaining_factor`,
+    with what a linearly converging sequence still has to go (:func:`~torchsym.optim.convergence.remaining_factor`,
     with ``tol_se > 0``; converged), or
     after ``patience`` steps without a lower progress residual (the best plane is kept).
     ``max_iters`` and ``tol_angle`` default to the settings'.

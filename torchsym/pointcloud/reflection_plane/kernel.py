@@ -15,7 +15,7 @@ import torch
 from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, reflect_points, spread_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.geometry.sampling import sphere_normals
-from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
+from torchsym.optim.convergence import remaining_factor
 from torchsym.pointcloud.reflection_plane.prealign import local_pca
 
 __all__ = ["kernel_refine", "kernel_score", "needs_kernel", "refine_by_kernel", "surface_variation"]

@@ -12,7 +12,7 @@ import torch
 
 from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
-from torchsym.pointcloud.reflection_plane.alternation import remaining_factor
+from torchsym.optim.convergence import remaining_factor
 
 __all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
 
@@ -66,7 +66,7 @@ def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, to
     matched in ``targets (M, 3)`` (normals ``nu (M, 3)``, ``index`` over ``targets``),
     until the normal moves less than ``tol_angle`` degrees or ``tol_se`` standard errors of
     the step's fit, whichever is larger (the step counted with what is left to go,
-    :func:`~torchsym.pointcloud.reflection_plane.alternation.remaining_factor`), or after
+    :func:`~torchsym.optim.convergence.remaining_factor`), or after
     ``max_iters`` steps.
 
     Returns ``(normal, offset, steps)``.

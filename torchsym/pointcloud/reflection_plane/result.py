@@ -35,7 +35,7 @@ class ReflectionPlaneResult(Result):
             the alternation's tolerances of ``normal``/``offset``).
         score: in [0, 1], the share of points off the plane whose mirror image lands within
             the tolerance, corrected for chance: ``(s - s0) / (1 - s0)`` with ``s0`` the
-            median share under random planes through the cloud (0: no better than chance).
+            highest share under random planes through the cloud (0: no better than chance).
         tolerance: the inlier distance used (``inlier_factor`` x the median spacing), in
             input units.
         iterations: alignment steps taken by the winning start (subsample + whole cloud).
