@@ -287,12 +287,12 @@ def _markdown(res: dict[str, Any]) -> str:
         f"{res['machine']}; torch {res['torch']}, dask {res['dask']}. The machine was shared with other "
         "sessions while this ran: the timings are noisy, and the speed-ups lower than on an idle machine.",
         "",
-        "`items/s` leaves out the engine's start-up (cluster up, workers importing torch), "
-        "`with start-up` includes it. `overhead ms` is wall x workers / n minus the mean task "
+        "`items/s` leaves out the engine's start-up (cluster up, workers importing torch) and shut-down, "
+        "`with start-up` includes them. `overhead ms` is wall x workers / n minus the mean task "
         "seconds of the records: the runner's cost per input (reading the input and writing the "
         "record with fsync included in the no-op row only). `peak MB`: driver and cluster processes together.",
         "",
-        "| dataset | engine | n | ok | items/s | with start-up | speed-up | start-up s | task s | overhead ms | peak MB |",
+        "| dataset | engine | n | ok | items/s | with start-up | speed-up | start + stop s | task s | overhead ms | peak MB |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     serial = {r["dataset"]: r["items_per_s"] for r in res["runs"] if r["engine"] == "serial"}

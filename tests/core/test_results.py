@@ -1,10 +1,11 @@
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 import torch
 
-from torchsym.core.results import Result
+from torchsym.core.results import ArraySink, Result, restore_arrays
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,6 +31,35 @@ class TestResult:
         r = _Toy(torch.tensor([1.0]), torch.tensor([True]), 1.0, {"a": torch.tensor([1])})
         moved = r.to("cpu")
         assert moved.normal.device.type == "cpu" and moved is not r and moved.extra["a"].device.type == "cpu"
+
+
+class TestArraySink:
+    def test_large_arrays_leave_the_dict(self):
+        inner = _Toy(torch.arange(6.0), torch.tensor([True]), 0.1, {})
+        r = _Toy(torch.tensor([1.0, 0.0]), torch.ones(5, dtype=torch.bool), 0.5,
+                 {"big": np.arange(7), "runs": [torch.zeros(2, 3, dtype=torch.int64)], "inner": inner})
+        sink = ArraySink(max_inline=4)
+        d = r.to_dict(sink)
+        assert d["normal"] == [1.0, 0.0] and d["score"] == 0.5
+        assert d["mask"] == {"$array": "mask", "shape": [5], "dtype": "bool"}
+        assert d["extra"]["big"]["$array"] == "extra.big" and d["extra"]["runs"][0]["$array"] == "extra.runs.0"
+        assert d["extra"]["inner"]["normal"] == {"$array": "extra.inner.normal", "shape": [6], "dtype": "float32"}
+        assert list(sink.arrays) == ["mask", "extra.big", "extra.runs.0", "extra.inner.normal"]
+        json.dumps(d)  # the references are JSON
+        back = restore_arrays(d, sink.arrays)
+        plain = r.to_dict()
+        assert back["mask"].tolist() == plain["mask"] and back["extra"]["runs"][0].tolist() == plain["extra"]["runs"][0]
+        assert back["extra"]["inner"]["normal"].tolist() == plain["extra"]["inner"]["normal"]
+
+    def test_names_made_unique(self):
+        sink = ArraySink(max_inline=0)
+        a, b = sink.take("x", np.zeros(1)), sink.take("x", np.ones(1))
+        assert a["$array"] != b["$array"] and len(sink.arrays) == 2
+
+    def test_small_arrays_stay_inline(self):
+        r = _Toy(torch.tensor([1.0, 0.0]), torch.tensor([True]), 0.5, {})
+        sink = ArraySink(max_inline=2)
+        assert r.to_dict(sink) == r.to_dict() and sink.arrays == {}
 
 
 class TestOnInputDevice:

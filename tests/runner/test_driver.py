@@ -76,8 +76,39 @@ class TestRunSerial:
         assert rec["status"] == "ok" and rec["artifacts"]
         assert all(Path(a).is_file() and Path(a).parent == tmp_path / "fig" for a in rec["artifacts"])
 
+    def test_large_arrays_beside_the_record(self, tmp_path, caplog):
+        import json
+
+        import numpy as np
+
+        cloud = torchsym.pointcloud.planted_symmetric_cloud(300, generator=0)
+        path = tmp_path / "planted.xyz"
+        np.savetxt(path, cloud.points.numpy())
+        cfg = {"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_starts": 2, "seed": 0}}]}
+        run(cfg, [str(path)], tmp_path / "apart.jsonl", engine="serial", max_inline=64)
+        run(cfg, [str(path)], tmp_path / "inline.jsonl", engine="serial", max_inline=None)
+        line = json.loads((tmp_path / "apart.jsonl").read_text())
+        ref = line["result"]["pairs"]
+        assert ref["$array"] == "pairs" and ref["shape"][1] == 2 and line["arrays"].endswith(".npz")
+        assert (tmp_path / "apart_arrays" / line["arrays"]).is_file()
+        assert line["result"]["normal"] == json.loads((tmp_path / "inline.jsonl").read_text())["result"]["normal"]
+        apart, inline = read_results(tmp_path / "apart.jsonl")[0], read_results(tmp_path / "inline.jsonl")[0]
+        assert inline["arrays"] is None and isinstance(inline["result"]["pairs"], list)
+        for name in ("pairs", "inliers"):
+            assert isinstance(apart["result"][name], np.ndarray) and apart["result"][name].tolist() == inline["result"][name]
+        assert read_results(tmp_path / "apart.jsonl", arrays=False)[0]["result"]["pairs"] == ref
+        (tmp_path / "apart_arrays" / line["arrays"]).unlink()  # a results file copied without its arrays
+        with caplog.at_level("WARNING"):
+            assert read_results(tmp_path / "apart.jsonl")[0]["result"]["pairs"] == ref
+        assert "references kept" in caplog.text
+
 
 class TestBadInput:
+    def test_max_inline(self, tmp_path, markers):
+        _clouds(tmp_path / "in", 1)
+        with pytest.raises(InputValueError, match="max_inline: expected a count >= 0 or None, got -1"):
+            run(probe_config(markers), str(tmp_path / "in"), tmp_path / "r.jsonl", imports=[PROBE], max_inline=-1)
+
     def test_glob_matches_nothing(self, tmp_path, markers):
         with pytest.raises(InputFileError, match=r"--inputs: the pattern '.*nothing\*\.ply' matches no file"):
             run(probe_config(markers), [str(tmp_path / "nothing*.ply")], tmp_path / "r.jsonl", imports=[PROBE])

@@ -17,7 +17,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("ignore::DeprecationW
 
 
 def _by_name(path: Path) -> dict[str, dict]:
-    return {Path(r["input"]).name: r for r in read_results(path)}
+    return {Path(r["input"]).name: r for r in read_results(path, arrays=False)}
 
 
 class TestLocalCluster:
@@ -83,11 +83,15 @@ class TestSeparateScheduler:
             cloud = torchsym.pointcloud.planted_symmetric_cloud(300, generator=i)
             np.savetxt(folder / f"p{i}.xyz", cloud.points.numpy())
         cfg = {"input": "pointcloud", "steps": [{"name": "reflection_plane", "params": {"n_starts": 2, "seed": 0}}]}
-        serial = run(cfg, str(folder), tmp_path / "serial.jsonl", engine="serial")
-        dask = run(cfg, str(folder), tmp_path / "dask.jsonl", address=cluster.scheduler_address)
+        serial = run(cfg, str(folder), tmp_path / "serial.jsonl", engine="serial", max_inline=64)
+        dask = run(cfg, str(folder), tmp_path / "dask.jsonl", address=cluster.scheduler_address, max_inline=64)
         assert (serial.n_ok, dask.n_ok, dask.engine) == (4, 4, "dask")
         drop = ("seconds", "timings")
         a, b = _by_name(tmp_path / "serial.jsonl"), _by_name(tmp_path / "dask.jsonl")
+        for name in a:  # the large arrays, kept beside the records
+            assert a[name]["arrays"] == b[name]["arrays"] and a[name]["result"]["pairs"]["$array"] == "pairs"
+            with np.load(tmp_path / "serial_arrays" / a[name]["arrays"]) as x, np.load(tmp_path / "dask_arrays" / b[name]["arrays"]) as y:
+                assert x.files == y.files and all(np.array_equal(x[k], y[k]) for k in x.files)
         assert sorted(a) == sorted(b)
         for name in a:
             ra = {k: v for k, v in a[name].items() if k not in drop}

@@ -27,6 +27,10 @@ class TestRunCommand:
         assert "pointcloud: 2 inputs scored" in text and "| plane |" in text
         ev = json.loads((tmp_path / "ev.json").read_text())
         assert ev["summary"]["plane"]["f"] == 1.0 and len(ev["items"]) == 2
+        assert isinstance(json.loads(out.read_text().splitlines()[0])["result"]["pairs"], list)  # 600 <= 1024
+        apart = tmp_path / "apart.jsonl"
+        assert main([*args[:5], str(apart), *args[6:], "--max-inline", "64"]) == 0
+        assert "$array" in json.loads(apart.read_text().splitlines()[0])["result"]["pairs"]
 
     def test_bad_input(self, tmp_path, capsys):
         cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "image_ksymmetry.yaml"

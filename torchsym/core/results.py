@@ -13,30 +13,68 @@ import functools
 import inspect
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 import torch
 
-__all__ = ["Result", "on_input_device", "to_jsonable"]
+__all__ = ["ArraySink", "Result", "on_input_device", "restore_arrays", "to_jsonable"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def to_jsonable(value: Any) -> Any:
-    """Convert tensors, arrays, dataclasses and containers to JSON-friendly Python."""
+@dataclasses.dataclass
+class ArraySink:
+    """Where :meth:`Result.to_dict` puts the arrays too large for a JSON record.
+
+    A tensor or array of more than ``max_inline`` elements is stored in ``arrays`` under
+    its dotted name in the result (``"pairs"``, ``"planes.0.inliers"``) and the dict holds
+    ``{"$array": name, "shape": [...], "dtype": "int64"}`` in its place; the dataset
+    runner writes ``arrays`` to one ``.npz`` per input beside its results file.
+
+    Attributes:
+        max_inline: the most elements an array may have and still be written inline.
+        arrays: name -> NumPy array (CPU), in the order met.
+    """
+
+    max_inline: int = 1024
+    arrays: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+
+    def take(self, name: str, array: np.ndarray) -> dict[str, Any]:
+        """Keep ``array`` under ``name`` (made unique); returns the reference that replaces it."""
+        key = name or "array"
+        if key in self.arrays:
+            key = f"{key}.{len(self.arrays)}"
+        self.arrays[key] = array
+        return {"$array": key, "shape": list(array.shape), "dtype": str(array.dtype)}
+
+
+def _join(name: str, part: Any) -> str:
+    return f"{name}.{part}" if name else str(part)
+
+
+def to_jsonable(value: Any, sink: ArraySink | None = None, name: str = "") -> Any:
+    """Convert tensors, arrays, dataclasses and containers to JSON-friendly Python.
+
+    With ``sink``, tensors and arrays of more than ``sink.max_inline`` elements go to the
+    sink and a reference takes their place (``name`` is the value's dotted name).
+    """
     if isinstance(value, Result):
-        return value.to_dict()
+        return value.to_dict() if sink is None else value.to_dict(sink, name)
     if isinstance(value, torch.Tensor):
         value = value.detach().cpu()
         if value.dtype in (torch.float16, torch.bfloat16):
             value = value.float()
+        if sink is not None and value.numel() > sink.max_inline:
+            return sink.take(name, value.numpy())
         if not value.is_complex() and (not value.is_floating_point() or bool(torch.isfinite(value).all())):
             return value.tolist()  # NumPy's tolist on a tensor's array is 100x slower
         return to_jsonable(value.numpy())
     if isinstance(value, np.ndarray):
+        if sink is not None and value.size > sink.max_inline:
+            return sink.take(name, value)
         if np.issubdtype(value.dtype, np.floating):
             return [to_jsonable(v) for v in value] if value.ndim else to_jsonable(float(value))
         return value.tolist()
@@ -48,13 +86,24 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, (np.bool_,)):
         return bool(value)
     if isinstance(value, dict):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
+        return {str(k): to_jsonable(v, sink, _join(name, k)) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [to_jsonable(v) for v in value]
+        return [to_jsonable(v, sink, _join(name, i)) for i, v in enumerate(value)]
     if isinstance(value, Path):
         return str(value)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: to_jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        return {f.name: to_jsonable(getattr(value, f.name), sink, _join(name, f.name)) for f in dataclasses.fields(value)}
+    return value
+
+
+def restore_arrays(value: Any, arrays: Mapping[str, np.ndarray]) -> Any:
+    """``value`` with every ``{"$array": name, ...}`` reference replaced by ``arrays[name]``."""
+    if isinstance(value, dict):
+        if "$array" in value and value["$array"] in arrays:
+            return arrays[value["$array"]]
+        return {k: restore_arrays(v, arrays) for k, v in value.items()}
+    if isinstance(value, list):
+        return [restore_arrays(v, arrays) for v in value]
     return value
 
 
@@ -74,11 +123,15 @@ def _move(value: Any, device: torch.device | str) -> Any:
 class Result:
     """Base of every solver result: a frozen dataclass with JSON and device helpers."""
 
-    def to_dict(self) -> dict[str, Any]:
-        """Every field as plain Python (tensors become nested lists), plus ``type``."""
+    def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
+        """Every field as plain Python (tensors become nested lists), plus ``type``.
+
+        With ``sink``, arrays of more than ``sink.max_inline`` elements go there and a
+        reference takes their place (:class:`ArraySink`); ``name`` prefixes their names.
+        """
         out: dict[str, Any] = {"type": type(self).__name__}
         for f in dataclasses.fields(self):
-            out[f.name] = to_jsonable(getattr(self, f.name))
+            out[f.name] = to_jsonable(getattr(self, f.name), sink, _join(name, f.name))
         return out
 
     def to_json(self, path: str | Path | None = None, *, indent: int | None = 2) -> str:

@@ -7,7 +7,7 @@ from typing import Any
 
 import torch
 
-from torchsym.core.results import Result
+from torchsym.core.results import ArraySink, Result
 
 __all__ = ["Cameras", "MultiviewPlaneResult"]
 
@@ -73,7 +73,7 @@ class MultiviewPlaneResult(Result):
     timings: dict[str, float]
     reconstruction: Any = dataclasses.field(default=None, repr=False, compare=False)
 
-    def to_dict(self) -> dict[str, Any]:
-        out = super().to_dict()
+    def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
+        out = super().to_dict(sink, name)
         out.pop("reconstruction")
         return out

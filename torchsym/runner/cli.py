@@ -2,7 +2,7 @@
 
     torchsym run CONFIG --inputs GLOB [GLOB ...] --out results.jsonl [--engine serial|local|dask]
                  [--address tcp://host:8786 | scheduler.json] [--workers N] [--retries N]
-                 [--no-resume] [--set KEY=VALUE ...] [--figures DIR]
+                 [--no-resume] [--set KEY=VALUE ...] [--figures DIR] [--max-inline N]
     torchsym evaluate results.jsonl --truth FILE [--json summary.json]
 
 Exit status: 0 when every input is ``ok`` (or every scored input evaluated), 1 when some
@@ -45,6 +45,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             args.config, args.inputs, args.out, engine=args.engine, address=args.address, workers=args.workers,
             threads_per_worker=args.threads, retries=args.retries, resume=not args.no_resume,
             overrides=_overrides(args.set or []), figures=args.figures, progress=not args.quiet,
+            max_inline=None if args.max_inline < 0 else args.max_inline,
         )
     except TorchsymError as exc:
         print(f"torchsym run: {exc}", file=sys.stderr)
@@ -96,6 +97,9 @@ def add_parsers(sub: Any) -> None:
     r.add_argument("--no-resume", action="store_true", help="start --out afresh instead of skipping what is done")
     r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting of the last solver (repeatable)")
     r.add_argument("--figures", metavar="DIR", help="write each result's pictures into DIR")
+    r.add_argument("--max-inline", type=int, default=1024, metavar="N",
+                   help="arrays of a result with more than N elements go to one .npz per input in <out stem>_arrays/, "
+                        "referenced from the record; -1 keeps every array in the record (default: %(default)s)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_run)
 

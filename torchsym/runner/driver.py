@@ -46,8 +46,9 @@ class RunSummary(Result):
         n_inputs: inputs matched by the patterns.
         n_skipped: inputs already done in the results file (same file, same config).
         n_ok, n_error, n_crashed: records written by this run, by status.
-        seconds: wall time of the run, engine start-up included.
-        engine_seconds: of which starting the engine (cluster up, workers set up).
+        seconds: wall time of the run, engine start-up and shut-down included.
+        engine_seconds: of which starting the engine (cluster up, workers set up) and
+            stopping it.
     """
 
     out: str
@@ -120,9 +121,12 @@ def _stems(paths: Sequence[Path]) -> list[str]:
     return [p.stem if counts[p.stem] == 1 else f"{p.stem}_{hashlib.sha1(str(p).encode()).hexdigest()[:8]}" for p in paths]
 
 
-def _record(key: InputKey, outcome: Mapping[str, Any], attempts: int) -> dict[str, Any]:
+def _record(store: ResultsStore, key: InputKey, outcome: Mapping[str, Any], attempts: int) -> dict[str, Any]:
     rec = key.as_dict()
-    for name in ("status", "kind", "result", "error", "seconds"):
+    for name in ("status", "kind", "result"):
+        rec[name] = outcome.get(name)
+    rec["arrays"] = store.write_arrays(key, outcome["arrays"]) if outcome.get("arrays") else None
+    for name in ("error", "seconds"):
         rec[name] = outcome.get(name)
     rec["attempts"] = attempts
     rec["artifacts"] = list(outcome.get("artifacts") or [])
@@ -154,6 +158,7 @@ def run(
     figures: str | Path | None = None,
     imports: Sequence[str] = (),
     max_in_flight: int | None = None,
+    max_inline: int | None = 1024,
     connect_timeout: float = 5.0,
     progress: bool = False,
 ) -> RunSummary:
@@ -181,6 +186,10 @@ def run(
             None writes none.
         imports: modules each worker imports first (to register your own solvers).
         max_in_flight: tasks in flight on a Dask engine (default: two per live worker thread, one running and one waiting, so no worker waits for the driver).
+        max_inline: a result's arrays with more elements than this (per-point pairs,
+            per-vertex maps) are kept in one ``.npz`` per input in ``<out stem>_arrays/``,
+            referenced from the record (:mod:`torchsym.runner.store`); None keeps them all
+            in the record (default 1024).
         connect_timeout: seconds to reach a remote scheduler (default 5).
         progress: show a progress bar over completions (skipped inputs counted done).
 
@@ -193,6 +202,8 @@ def run(
         EngineError: the Dask scheduler cannot be reached.
     """
     t0 = time.perf_counter()
+    if max_inline is not None and (isinstance(max_inline, bool) or not isinstance(max_inline, int) or max_inline < 0):
+        raise InputValueError(f"max_inline: expected a count >= 0 or None, got {max_inline!r}")
     for name in imports:  # they may register the config's solvers
         importlib.import_module(name)
     cfg = config if isinstance(config, PipelineConfig) else load_config(config)
@@ -210,7 +221,7 @@ def run(
         if store.torn_bytes:
             logger.warning("%s: cut a torn last line (%d bytes)", out, store.torn_bytes)
         todo = [i for i, k in enumerate(keys) if not store.is_done(k)]
-        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, stems[i], tuple(imports)) for i in todo]
+        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, stems[i], tuple(imports), max_inline) for i in todo]
         chosen = _choose_engine(engine, len(specs), address)
         skipped = len(paths) - len(specs)
         with _progress(len(paths), skipped, progress) as bar, open_engine(
@@ -218,15 +229,17 @@ def run(
             retries=retries, max_in_flight=max_in_flight, connect_timeout=connect_timeout,
         ) as (outcomes, engine_seconds):
             for spec, outcome, attempts in outcomes:
-                store.append(_record(keys[spec.index], outcome, attempts))
+                store.append(_record(store, keys[spec.index], outcome, attempts))
                 counts[outcome["status"]] += 1
                 if outcome["status"] == "crashed":
                     logger.warning("%s: crashed on every attempt (%d)", spec.input, attempts)
                 bar.set_postfix(ok=counts["ok"], error=counts["error"], crashed=counts["crashed"], refresh=False)
                 bar.update(1)
+            last = time.perf_counter()
+        stopping = time.perf_counter() - last
     return RunSummary(
         str(out), chosen, len(paths), skipped, counts["ok"], counts["error"], counts["crashed"],
-        time.perf_counter() - t0, engine_seconds,
+        time.perf_counter() - t0, engine_seconds + stopping,
     )
 
 

@@ -265,7 +265,7 @@ def _score_meshes(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[
             rows.append({"rate": 0.0, "n_landmarks": int(landmarks.shape[0])})
             continue
         mesh = read_mesh(rec["input"], dtype=torch.float64)
-        score = correspondence_rate(mesh, torch.tensor(rec["result"]["map"]), landmarks=landmarks)
+        score = correspondence_rate(mesh, torch.as_tensor(rec["result"]["map"]), landmarks=landmarks)
         rows.append({"rate": _finite(score.rate), "n_landmarks": score.num_evaluated, "threshold": score.threshold})
     rates = [r["rate"] if r["rate"] is not None else 0.0 for r in rows]
     summary = {"mesh": {"mean_rate": float(np.mean(rates)) if rates else math.nan, "mesh_rate": mesh_rate(rates)}}

@@ -6,7 +6,8 @@ torn last line, which reopening cuts. A record::
 
     {"input": "/data/chair.ply", "size": 81234, "mtime_ns": 1733212345000000000,
      "config_hash": "3f2a...", "status": "ok", "kind": "pointcloud",
-     "result": {...}, "error": null, "seconds": 0.41, "attempts": 1, "artifacts": []}
+     "result": {...}, "arrays": "chair-5d41402abc4b.npz", "error": null,
+     "seconds": 0.41, "attempts": 1, "artifacts": []}
 
 ``status`` is ``"ok"`` (``result`` holds the solver's ``to_dict()``), ``"error"`` (a
 :class:`~torchsym.errors.TorchsymError` or another exception raised by the task: final,
@@ -15,6 +16,12 @@ running it died on every attempt). An input is done when its latest record has s
 ``ok`` or ``error`` and the same path, size, mtime and config hash: reopening the file
 skips it; a crashed input, a changed file or another config runs again and its new
 record is appended (the latest record of an input wins).
+
+The result's large arrays (per-point pairs, per-vertex maps: more elements than the run's
+``max_inline``) are not in the line: they are in one ``.npz`` per input in the folder
+``<file stem>_arrays`` beside the file, named by ``arrays``, written and fsync-ed before
+the record, and referenced in ``result`` as ``{"$array": name, "shape", "dtype"}``;
+:func:`read_results` puts them back.
 
 A lock (``fcntl.flock`` on ``<file>.lock``, released by the kernel when the driver dies,
 even by SIGKILL) stops a second driver appending to the same file.
@@ -27,15 +34,20 @@ import errno
 import fcntl
 import hashlib
 import json
+import logging
 import os
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from torchsym.core.results import to_jsonable
+import numpy as np
+
+from torchsym.core.results import restore_arrays, to_jsonable
 from torchsym.errors import InputFileError
 
-__all__ = ["FINAL_STATUSES", "InputKey", "ResultsStore", "config_hash", "input_key", "read_results"]
+__all__ = ["FINAL_STATUSES", "InputKey", "ResultsStore", "arrays_dir", "config_hash", "input_key", "read_results"]
+
+logger = logging.getLogger(__name__)
 
 #: statuses after which an input is not run again (with the same key)
 FINAL_STATUSES = ("ok", "error")
@@ -107,13 +119,34 @@ def _summary(record: Mapping[str, Any]) -> dict[str, Any]:
     return {name: record.get(name) for name in (*InputKey.__dataclass_fields__, "status", "attempts") if name in record}
 
 
-def read_results(path: str | Path, *, latest: bool = True) -> list[dict[str, Any]]:
+def arrays_dir(path: str | Path) -> Path:
+    """The folder of a results file's arrays: ``<file stem>_arrays`` beside it."""
+    p = Path(path)
+    return p.with_name(p.stem + "_arrays")
+
+
+def _with_arrays(record: dict[str, Any], folder: Path) -> dict[str, Any]:
+    name = record.get("arrays")
+    if not name or not isinstance(record.get("result"), dict):
+        return record
+    try:
+        with np.load(folder / name, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+    except (OSError, ValueError) as exc:
+        logger.warning("results: arrays of %s not read from %s (%s); references kept", record.get("input"), folder / name, exc)
+        return record
+    return {**record, "result": restore_arrays(record["result"], arrays)}
+
+
+def read_results(path: str | Path, *, latest: bool = True, arrays: bool = True) -> list[dict[str, Any]]:
     """The records of a results file (a torn last line is ignored, the file left as it is).
 
     Args:
         path: a JSON-lines results file written by :func:`torchsym.run`.
         latest: keep only the latest record of each input (the current one), in the
             order the inputs first appear; False returns every line.
+        arrays: put the result's large arrays back from ``<file stem>_arrays/`` (as NumPy
+            arrays); False leaves their ``{"$array": ...}`` references.
 
     Raises:
         InputFileError: the file does not exist or a line other than the last is not JSON.
@@ -122,12 +155,15 @@ def read_results(path: str | Path, *, latest: bool = True) -> list[dict[str, Any
     if not p.is_file():
         raise InputFileError(f"results: file {str(p)!r} does not exist")
     records, _ = _parse_lines(p)
-    if not latest:
-        return records
-    by_input: dict[str, dict[str, Any]] = {}
-    for rec in records:
-        by_input[str(rec.get("input"))] = rec  # dicts keep first-insertion order
-    return list(by_input.values())
+    if latest:
+        by_input: dict[str, dict[str, Any]] = {}
+        for rec in records:
+            by_input[str(rec.get("input"))] = rec  # dicts keep first-insertion order
+        records = list(by_input.values())
+    if arrays:
+        folder = arrays_dir(p)
+        records = [_with_arrays(rec, folder) for rec in records]
+    return records
 
 
 class ResultsStore:
@@ -221,6 +257,29 @@ class ResultsStore:
         if rec is None or rec.get("status") not in FINAL_STATUSES:
             return False
         return all(rec.get(k) == v for k, v in key.as_dict().items())
+
+    def write_arrays(self, key: InputKey, arrays: Mapping[str, np.ndarray]) -> str:
+        """Write one input's arrays to ``<file stem>_arrays/<input stem>-<key hash>.npz``
+        (a temporary file, fsync-ed, then renamed); returns the file's name."""
+        folder = arrays_dir(self.path)
+        digest = hashlib.sha256(json.dumps(key.as_dict(), sort_keys=True).encode()).hexdigest()[:12]
+        name = f"{Path(key.input).stem}-{digest}.npz"
+        try:
+            folder.mkdir(exist_ok=True)
+            tmp = folder / (name + ".tmp")
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **arrays)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, folder / name)
+            fd = os.open(folder, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except OSError as exc:
+            raise InputFileError(f"--out: cannot write arrays to {str(folder)!r} ({exc.strerror or exc})") from None
+        return name
 
     def append(self, record: Mapping[str, Any]) -> None:
         """Write one record as a line, flushed and fsync-ed before returning."""

@@ -16,6 +16,8 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from torchsym.core.results import ArraySink
+
 __all__ = ["TaskSpec", "run_task"]
 
 
@@ -32,6 +34,9 @@ class TaskSpec:
         figures_dir: folder for the result's pictures, or None for none.
         stem: file-name stem of the pictures.
         imports: modules imported before the config is read (they register solvers).
+        max_inline: arrays of the result with more elements than this travel and are kept
+            apart from the record (:class:`~torchsym.core.results.ArraySink`); None keeps
+            every array in the record.
     """
 
     index: int
@@ -41,6 +46,7 @@ class TaskSpec:
     figures_dir: str | None = None
     stem: str = ""
     imports: tuple[str, ...] = ()
+    max_inline: int | None = 1024
 
 
 def _error(exc: BaseException) -> dict[str, Any]:
@@ -50,11 +56,13 @@ def _error(exc: BaseException) -> dict[str, Any]:
 
 
 def run_task(spec: TaskSpec) -> dict[str, Any]:
-    """Run one input; returns ``{"status", "kind", "result", "error", "seconds", "artifacts"}``.
+    """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds", "artifacts"}``.
 
-    ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``) or
-    ``"error"`` (``error`` is ``{"type", "message", "where"}``). ``seconds`` is the wall
-    time of reading, building and solving (pictures excluded).
+    ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``, its arrays
+    of more than ``spec.max_inline`` elements in ``arrays`` as NumPy arrays and a
+    reference in their place) or ``"error"`` (``error`` is ``{"type", "message",
+    "where"}``). ``seconds`` is the wall time of reading, building and solving (pictures
+    excluded).
     """
     import cv2
     import torch
@@ -63,7 +71,9 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         torch.set_num_threads(spec.threads)
     if cv2.getNumThreads() != spec.threads:
         cv2.setNumThreads(spec.threads)
-    out: dict[str, Any] = {"status": "error", "kind": None, "result": None, "error": None, "seconds": 0.0, "artifacts": []}
+    out: dict[str, Any] = {
+        "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
+    }
     t0 = time.perf_counter()
     try:
         for name in spec.imports:
@@ -76,7 +86,12 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         out["kind"] = kind
         result = build_pipeline(cfg)(data)
         out["seconds"] = time.perf_counter() - t0
-        out["result"] = result.to_dict()
+        if spec.max_inline is None:
+            out["result"] = result.to_dict()
+        else:
+            sink = ArraySink(spec.max_inline)
+            out["result"] = result.to_dict(sink)
+            out["arrays"] = sink.arrays
         if spec.figures_dir is not None:
             from torchsym.viz import write_artifacts
 
@@ -87,5 +102,6 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
     except Exception as exc:  # every exception is the input's final outcome, recorded
         out["seconds"] = time.perf_counter() - t0
         out["result"] = None
+        out["arrays"] = {}
         out["error"] = _error(exc)
     return out

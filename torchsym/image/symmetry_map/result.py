@@ -7,7 +7,7 @@ from typing import Any
 
 import torch
 
-from torchsym.core.results import Result, to_jsonable
+from torchsym.core.results import ArraySink, Result, to_jsonable
 
 __all__ = ["StylizedResult", "SymmetryMapResult"]
 
@@ -60,8 +60,9 @@ class SymmetryMapResult(Result):
             return torch.zeros(self.image.shape[-2:], dtype=self.image.dtype, device=self.image.device)
         return self.ssm.max(0).values
 
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON summary: the maps themselves are written as ``.npy`` by the picture writer."""
+    def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
+        """A JSON summary (no large arrays, so ``sink`` is unused): the maps themselves are
+        written as ``.npy`` by the picture writer."""
         return {
             "type": type(self).__name__,
             "map_size": list(self.ssm.shape[-2:]) if self.ssm.dim() == 3 else list(self.image.shape[-2:]),
@@ -96,8 +97,9 @@ class StylizedResult(Result):
     n_superpixels: int
     notes: tuple[str, ...] = ()
 
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON summary (the picture is written by the picture writer)."""
+    def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
+        """A JSON summary (no large arrays, so ``sink`` is unused; the picture is written by
+        the picture writer)."""
         return {
             "type": type(self).__name__,
             "image_size": list(self.image.shape[-2:]),
