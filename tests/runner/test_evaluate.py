@@ -122,6 +122,94 @@ class TestMeshes:
         assert ev.summary["mesh"]["mean_rate"] == pytest.approx(4 / 9)
 
 
+def _bsds_mat(path, segmentations):
+    """A BSDS500 groundTruth file: a 1 x N cell of structs with ``Segmentation``."""
+    import numpy as np
+    import scipy.io
+
+    cell = np.empty((1, len(segmentations)), dtype=object)
+    for i, seg in enumerate(segmentations):
+        struct = np.empty((1, 1), dtype=[("Segmentation", object), ("Boundaries", object)])
+        struct[0, 0] = (np.asarray(seg, dtype=np.uint16), np.zeros_like(seg, dtype=np.uint8))
+        cell[0, i] = struct
+    scipy.io.savemat(str(path), {"groundTruth": cell})
+
+
+class TestSuperpixels:
+    def test_value(self, tmp_path):
+        import numpy as np
+
+        cols = np.tile(np.array([0, 0, 1, 1]), (4, 1))  # two superpixels: left and right halves
+        rows_ = cols.T.copy()  # top and bottom halves
+        truth = tmp_path / "gt"
+        truth.mkdir()
+        _bsds_mat(truth / "a.mat", [cols + 1, rows_ + 1])  # BSDS labels start at 1
+        _bsds_mat(truth / "b.mat", [cols + 1])
+        results = _write(tmp_path / "r.jsonl", [
+            {"input": "/p/a.jpg", "status": "ok", "result": {"type": "SymmSlicResult", "labels": cols.tolist()}},
+            {"input": "/p/b.jpg", "status": "error", "result": None},
+        ])
+        ev = evaluate(results, truth)
+        assert (ev.kind, ev.n_scored, ev.n_failed) == ("superpixels", 2, 1)
+        a, b = ev.items
+        # against the halves it matches: ASA 1, USE 0; against top/bottom each superpixel
+        # keeps 4 of its 8 pixels in one segment (ASA 1/2) and leaks min(4, 4) into each of
+        # the two segments it crosses (USE (4 * 4) / 16 = 1)
+        assert a["asa_best"] == 1.0 and a["asa_mean"] == pytest.approx(0.75)
+        assert a["use_best"] == 0.0 and a["use_mean"] == pytest.approx(0.5)
+        assert a["br_best"] == 1.0 and a["n_superpixels"] == 2
+        assert b["asa_mean"] == 0.0 and b["use_mean"] == 1.0  # failed: the worst values
+        assert ev.summary["superpixels"]["asa_mean"] == pytest.approx(0.375)
+
+    def test_record_without_labels(self, tmp_path):
+        truth = tmp_path / "gt"
+        truth.mkdir()
+        _bsds_mat(truth / "a.mat", [[[1, 2]]])
+        results = _write(tmp_path / "r.jsonl", [_axes("a.jpg", [[0, 0, 1, 1]], [1.0])])
+        with pytest.raises(InputValueError, match="has no 'labels' array to score"):
+            evaluate(results, truth)
+
+
+class TestSegmentation:
+    def test_value(self, tmp_path):
+        import cv2
+        import numpy as np
+
+        gt = np.zeros((4, 5), np.uint8)
+        gt[:, :2] = 255  # the object: the two left columns
+        gt[:, 2] = 128  # GrabCut's unlabelled band
+        truth = tmp_path / "masks"
+        truth.mkdir()
+        cv2.imwrite(str(truth / "a.png"), gt)
+        cv2.imwrite(str(truth / "b.bmp"), gt)
+        mask = np.zeros((4, 5), bool)
+        mask[:, :3] = True  # the band is not counted
+        mask[0, 4] = True  # one pixel wrong
+        results = _write(tmp_path / "r.jsonl", [
+            {"input": "/p/a.jpg", "status": "ok", "result": {"type": "SymmSlicResult", "mask": mask.tolist()}},
+            {"input": "/p/b.jpg", "status": "crashed", "result": None},
+        ])
+        ev = evaluate(results, truth)
+        a, b = ev.items
+        # 16 counted pixels, the box the object's 8 of them (band excluded): 1/16 and 1/8;
+        # the crash finds nothing: 8 wrong
+        assert (ev.kind, a["over_image"], a["over_box"]) == ("segmentation", 1 / 16, 1 / 8)
+        assert (b["over_image"], b["over_box"]) == (0.5, 1.0)
+        assert ev.summary["segmentation"]["over_image"] == pytest.approx((1 / 16 + 0.5) / 2)
+
+
+class TestPointSymmImage:
+    def test_one_axis_segment(self, tmp_path):
+        results = _write(tmp_path / "r.jsonl", [
+            {"input": "/photos/a.png", "status": "ok",
+             "result": {"type": "ImageAxisResult", "segment": [[50, 0], [50, 100]], "score": 0.7, "image_size": [100, 100]}},
+        ])
+        truth = tmp_path / "axes.txt"
+        truth.write_text("a.png 50 0 50 100\n")
+        ev = evaluate(results, truth)
+        assert ev.items[0]["n_detections"] == 1 and ev.items[0]["correct_thesis"] == 1
+
+
 class TestExceptions:
     def test_bad_truth(self, tmp_path):
         bad = tmp_path / "axes.txt"

@@ -18,6 +18,16 @@ them apart:
   template landmark k and at its mirror landmark. Scored by the correspondence rate of
   each mesh's map at the landmarks and the mesh rate, the share of meshes above 75 %
   (Sec. 6.3.2, :func:`torchsym.metrics.correspondence_rate`, :func:`~torchsym.metrics.mesh_rate`).
+- **superpixels** (``superpixels``, SymmSLIC's ``labels``): a folder of BSDS500
+  ``NAME.mat`` files (``groundTruth/<split>``: several human segmentations each). Scored
+  as D. Stutz's benchmark does (Sec. 4.4): boundary recall, undersegmentation error and
+  achievable segmentation accuracy, the mean over the human segmentations and the best,
+  and the superpixels produced (:mod:`torchsym.metrics.superpixels`).
+- **object masks** (``segmentation``, SymmSLIC's ``mask``): a folder of ``NAME.png`` or
+  ``NAME.bmp`` masks, the object non-zero; a GrabCut-style 128 band is unlabelled
+  (neither error nor counted). Scored by the segmentation error over all pixels (the
+  thesis's normalisation, Sec. 4.3.1) and over the mask's bounding box
+  (:func:`torchsym.metrics.segmentation_error`).
 
 A record is matched to its ground truth by the input's path, file name or stem, in that
 order. Inputs without ground truth are left out (counted); inputs whose record is an
@@ -40,7 +50,7 @@ from torchsym.core.results import Result
 from torchsym.errors import InputFileError, InputValueError
 from torchsym.runner.store import read_results
 
-__all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_truth"]
+__all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_object_mask", "read_truth"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,10 +58,11 @@ class GroundTruth:
     """Ground truth of one kind of input.
 
     Attributes:
-        kind: ``"image"``, ``"pointcloud"`` or ``"mesh"``.
+        kind: ``"image"``, ``"pointcloud"``, ``"mesh"``, ``"superpixels"`` or ``"segmentation"``.
         items: per input name (path, file name or stem): for images a ``(G, 4)`` float64
             tensor of axes; for clouds ``{"normal" (3,), "offset" (), "box" (min, max) or
-            None}``; for meshes ``(L, 2)`` int64 0-based landmark pairs.
+            None}``; for meshes ``(L, 2)`` int64 0-based landmark pairs; for superpixels
+            and masks the ground-truth file (read when scored).
         source: the file or folder read.
     """
 
@@ -128,10 +139,19 @@ def _read_vts(folder: Path) -> GroundTruth:
     return GroundTruth("mesh", items, str(folder))
 
 
+MASK_SUFFIXES = (".png", ".bmp")
+
+
+def _read_files(folder: Path, suffixes: tuple[str, ...], kind: str) -> GroundTruth:
+    items = {f.stem: f for f in sorted(folder.iterdir()) if f.suffix.lower() in suffixes}
+    return GroundTruth(kind, items, str(folder))
+
+
 def read_truth(path: str | Path) -> GroundTruth:
     """Read a ground-truth file or folder in one of the formats of the module docstring.
 
-    A folder is read as BCICP ``.vts`` files, a ``.jsonl``/``.json`` file as planes, any
+    A folder is read as BCICP ``.vts`` files, else as BSDS500 ``.mat`` segmentations,
+    else as ``.png``/``.bmp`` object masks; a ``.jsonl``/``.json`` file as planes, any
     other file as ``image x1 y1 x2 y2`` lines.
 
     Raises:
@@ -139,7 +159,15 @@ def read_truth(path: str | Path) -> GroundTruth:
     """
     p = Path(path)
     if p.is_dir():
-        return _read_vts(p)
+        if any(p.glob("*.vts")) or any(p.glob("corres/*.vts")):
+            return _read_vts(p)
+        if any(p.glob("*.mat")):
+            return _read_files(p, (".mat",), "superpixels")
+        if any(f.suffix.lower() in MASK_SUFFIXES for f in p.iterdir()):
+            return _read_files(p, MASK_SUFFIXES, "segmentation")
+        raise InputFileError(
+            f"truth: folder {str(p)!r} holds no NAME.vts / NAME.sym.vts pairs, BSDS500 .mat files or .png/.bmp masks"
+        )
     if not p.is_file():
         raise InputFileError(f"--truth: {str(p)!r} does not exist")
     if p.suffix.lower() in (".jsonl", ".json"):
@@ -152,7 +180,8 @@ class Evaluation(Result):
     """Scores of a run against ground truth.
 
     Attributes:
-        kind: the kind of input scored (``"image"``, ``"pointcloud"``, ``"mesh"``).
+        kind: the kind of ground truth scored (``"image"``, ``"pointcloud"``, ``"mesh"``,
+            ``"superpixels"``, ``"segmentation"``).
         n_records: records in the results file.
         n_scored: records with ground truth, scored.
         n_failed: of those, records with status ``error`` or ``crashed`` (counted as missed).
@@ -188,7 +217,7 @@ def _detected_axes(rec: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
         return axes, torch.tensor(r["scores"], dtype=torch.float64).reshape(-1)
     flat = [v for point in r.get("segment") or [] for v in point]
     if len(flat) == 4 and None not in flat:  # one axis (pointsymm_image)
-        return torch.tensor(seg, dtype=torch.float64).reshape(1, 4), torch.tensor([float(r.get("score") or 0.0)], dtype=torch.float64)
+        return torch.tensor(flat, dtype=torch.float64).reshape(1, 4), torch.tensor([float(r.get("score") or 0.0)], dtype=torch.float64)
     return empty
 
 
@@ -272,6 +301,74 @@ def _score_meshes(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[
     return summary, rows
 
 
+def _result_array(rec: Mapping[str, Any], name: str) -> np.ndarray:
+    """``rec["result"][name]`` as an array; ``InputValueError`` when the result has none."""
+    value = rec["result"].get(name)
+    if value is None or isinstance(value, Mapping):  # absent, or an array whose .npz is missing
+        raise InputValueError(
+            f"results: the record of {str(rec.get('input'))!r} has no {name!r} array to score "
+            f"(a {rec['result'].get('type')!r}; this ground truth needs SymmSLIC's {name})"
+        )
+    return np.asarray(value)
+
+
+def _bsds_segmentations(path: Path) -> list[np.ndarray]:
+    import scipy.io
+
+    try:
+        gts = scipy.io.loadmat(str(path))["groundTruth"][0]
+        return [np.asarray(g["Segmentation"][0, 0]) for g in gts]
+    except (OSError, KeyError, IndexError, ValueError) as exc:
+        raise InputFileError(f"truth: {str(path)!r} is not a BSDS500 groundTruth file ({exc})") from None
+
+
+def _score_superpixels(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    from torchsym.metrics import achievable_segmentation_accuracy, boundary_recall, undersegmentation_error
+
+    rows = []
+    for rec, path in pairs:
+        truths = _bsds_segmentations(path)
+        if not _ok(rec):  # missed: the worst value of each measure
+            rows.append({"br_mean": 0.0, "br_best": 0.0, "use_mean": 1.0, "use_best": 1.0, "asa_mean": 0.0, "asa_best": 0.0,
+                         "n_superpixels": 0})
+            continue
+        labels = _result_array(rec, "labels")
+        br = [boundary_recall(labels, t) for t in truths]
+        use = [undersegmentation_error(labels, t) for t in truths]
+        asa = [achievable_segmentation_accuracy(labels, t) for t in truths]
+        rows.append({"br_mean": float(np.mean(br)), "br_best": float(np.max(br)), "use_mean": float(np.mean(use)),
+                     "use_best": float(np.min(use)), "asa_mean": float(np.mean(asa)), "asa_best": float(np.max(asa)),
+                     "n_superpixels": int(len(np.unique(labels)))})
+    summary = {"superpixels": {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}}
+    return summary, rows
+
+
+def read_object_mask(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """``(object, unlabelled)`` bool ``(H, W)`` of a mask file: non-zero is the object, a
+    GrabCut-style 128 band is unlabelled."""
+    import cv2
+
+    m = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if m is None:
+        raise InputFileError(f"truth: cannot read the mask {str(path)!r}")
+    m = m[..., 0] if m.ndim == 3 else m
+    return m > 128, m == 128
+
+
+def _score_segmentation(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    from torchsym.metrics import segmentation_error
+
+    rows = []
+    for rec, path in pairs:
+        obj, band = read_object_mask(path)
+        mask = _result_array(rec, "mask").astype(bool) if _ok(rec) else np.zeros_like(obj)  # missed: nothing found
+        if mask.shape != obj.shape:
+            raise InputValueError(f"results: the mask of {str(rec.get('input'))!r} is {mask.shape}, its ground truth {obj.shape}")
+        rows.append(segmentation_error(mask, obj, ignore=band))
+    summary = {"segmentation": {k: float(np.mean([r[k] for r in rows])) for k in ("over_image", "over_box")}}
+    return summary, rows
+
+
 def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
@@ -281,6 +378,8 @@ SCORERS: dict[str, Callable[[Sequence[tuple[Mapping[str, Any], Any]]], tuple[dic
     "image": _score_images,
     "pointcloud": _score_clouds,
     "mesh": _score_meshes,
+    "superpixels": _score_superpixels,
+    "segmentation": _score_segmentation,
 }
 
 
