@@ -198,6 +198,43 @@ class TestSegmentation:
         assert ev.summary["segmentation"]["over_image"] == pytest.approx((1 / 16 + 0.5) / 2)
 
 
+class TestSymmetryMap:
+    def test_value(self, tmp_path):
+        import cv2
+        import numpy as np
+
+        gt = np.zeros((8, 8), np.uint8)
+        gt[2:6, 2:6] = 255
+        truth = tmp_path / "segmentations"
+        truth.mkdir()
+        cv2.imwrite(str(truth / "a_seg0.png"), gt)  # matched to a.png by its stem and a suffix
+        cv2.imwrite(str(truth / "b_seg0.png"), gt)
+        half = (gt > 0).astype(np.float32)[::2, ::2]  # the map at half resolution
+        results = _write(tmp_path / "r.jsonl", [
+            {"input": "/p/a.png", "status": "ok", "result": {"type": "SymmetryMapResult", "score_map": half.tolist()}},
+            {"input": "/p/b.png", "status": "error", "result": None},
+        ])
+        ev = evaluate(results, truth)
+        a, b = ev.items
+        assert (a["auc"], a["precision"], a["recall"]) == (1.0, 1.0, 1.0)
+        assert b["recall"] == 0.0 and b["auc"] == 0.5  # a failed input: an all-zero map
+        assert set(ev.summary) == {"ssm"} and ev.summary["ssm"]["recall"] == 0.5
+
+    def test_score_map_in_the_sink(self):
+        import torch
+
+        from torchsym.core.results import ArraySink
+        from torchsym.image.symmetry_map.result import SymmetryMapResult
+
+        ssm = torch.rand(2, 40, 50, generator=torch.Generator().manual_seed(0))
+        r = SymmetryMapResult(torch.zeros(2, 40, 50, 2), ssm, torch.zeros(2, 3), torch.zeros(0, 4),
+                              torch.zeros(0, dtype=torch.int64), torch.zeros(3, 40, 50), 1.0, "irs", 1)
+        sink = ArraySink()
+        d = r.to_dict(sink)
+        assert d["score_map"]["$array"] == "score_map" and (sink.arrays["score_map"] == ssm.max(0).values.numpy()).all()
+        assert "score_map" not in r.to_dict()  # the CLI's summary
+
+
 class TestPointSymmImage:
     def test_one_axis_segment(self, tmp_path):
         results = _write(tmp_path / "r.jsonl", [

@@ -23,15 +23,19 @@ them apart:
   as D. Stutz's benchmark does (Sec. 4.4): boundary recall, undersegmentation error and
   achievable segmentation accuracy, the mean over the human segmentations and the best,
   and the superpixels produced (:mod:`torchsym.metrics.superpixels`).
-- **object masks** (``segmentation``, SymmSLIC's ``mask``): a folder of ``NAME.png`` or
-  ``NAME.bmp`` masks, the object non-zero; a GrabCut-style 128 band is unlabelled
-  (neither error nor counted). Scored by the segmentation error over all pixels (the
+- **object masks** (``segmentation``): a folder of ``NAME.png`` or ``NAME.bmp`` masks,
+  the object non-zero; a GrabCut-style 128 band is unlabelled (neither error nor
+  counted). SymmSLIC's ``mask`` is scored by the segmentation error over all pixels (the
   thesis's normalisation, Sec. 4.3.1) and over the mask's bounding box
-  (:func:`torchsym.metrics.segmentation_error`).
+  (:func:`torchsym.metrics.segmentation_error`); a symmetry map's ``score_map`` (the
+  highest score over its axes, resized to the mask) by the SSM protocol of Sec. 3.3.3:
+  ROC AUC, precision, recall and F_beta at 100/255 (:func:`torchsym.metrics.ssm_scores`).
 
 A record is matched to its ground truth by the input's path, file name or stem, in that
-order. Inputs without ground truth are left out (counted); inputs whose record is an
-error or a crash count as missed (no detection; a correspondence rate of 0).
+order, else by the one ground-truth name that is its stem and a ``_`` suffix (the
+Leeds Butterflies' ``NAME_seg0.png``). Inputs without ground truth are left out
+(counted); inputs whose record is an error or a crash count as missed (no detection; a
+correspondence rate of 0).
 """
 
 from __future__ import annotations
@@ -71,12 +75,14 @@ class GroundTruth:
     source: str
 
     def find(self, input: str) -> Any | None:
-        """The ground truth of ``input`` (matched by path, file name, then stem), or None."""
+        """The ground truth of ``input``, matched by path, file name, stem, then the one
+        name that is the stem and a ``_`` suffix (``0010001_seg0`` for ``0010001.png``); or None."""
         p = Path(input)
         for name in (str(input), p.name, p.stem):
             if name in self.items:
                 return self.items[name]
-        return None
+        prefixed = [k for k in self.items if k.startswith(p.stem + "_")]
+        return self.items[prefixed[0]] if len(prefixed) == 1 else None
 
 
 def _read_axes_txt(path: Path) -> GroundTruth:
@@ -355,17 +361,40 @@ def read_object_mask(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return m > 128, m == 128
 
 
+def _ssm_row(rec: Mapping[str, Any], obj: np.ndarray) -> dict[str, float]:
+    """SSM scores of a symmetry map record's ``score_map`` (resized to the mask) against ``obj``."""
+    import torch.nn.functional as F
+
+    from torchsym.metrics import ssm_scores
+
+    score = torch.zeros(obj.shape)
+    if _ok(rec):
+        s = torch.as_tensor(_result_array(rec, "score_map"), dtype=torch.float32)
+        score = F.interpolate(s[None, None], size=obj.shape, mode="bilinear", align_corners=False)[0, 0].clamp(0, 1)
+    sc = ssm_scores(score, torch.from_numpy(obj))
+    return {"auc": sc.auc, "precision": sc.precision, "recall": sc.recall, "f_beta_0_09": sc.f_beta_0_09, "f_beta_0_3": sc.f_beta_0_3}
+
+
 def _score_segmentation(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    """Masks (SymmSLIC) by segmentation error; symmetry maps (``score_map``) by the SSM scores."""
     from torchsym.metrics import segmentation_error
 
+    maps = any(_ok(rec) and "score_map" in rec["result"] for rec, _ in pairs)  # a symmetry-map run
     rows = []
     for rec, path in pairs:
         obj, band = read_object_mask(path)
+        if maps:  # a failed input scores an all-zero map
+            rows.append(_ssm_row(rec, obj))
+            continue
         mask = _result_array(rec, "mask").astype(bool) if _ok(rec) else np.zeros_like(obj)  # missed: nothing found
         if mask.shape != obj.shape:
             raise InputValueError(f"results: the mask of {str(rec.get('input'))!r} is {mask.shape}, its ground truth {obj.shape}")
         rows.append(segmentation_error(mask, obj, ignore=band))
-    summary = {"segmentation": {k: float(np.mean([r[k] for r in rows])) for k in ("over_image", "over_box")}}
+    summary = {}
+    for protocol, keys in (("segmentation", ("over_image", "over_box")), ("ssm", ("auc", "precision", "recall", "f_beta_0_09", "f_beta_0_3"))):
+        got = [r for r in rows if keys[0] in r]
+        if got:
+            summary[protocol] = {k: float(np.mean([r[k] for r in got])) for k in keys}
     return summary, rows
 
 

@@ -61,9 +61,10 @@ class SymmetryMapResult(Result):
         return self.ssm.max(0).values
 
     def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
-        """A JSON summary (no large arrays, so ``sink`` is unused): the maps themselves are
-        written as ``.npy`` by the picture writer."""
-        return {
+        """A JSON summary; with ``sink`` (a dataset run) also ``score_map``, the ``(H, W)``
+        highest score over the axes at map resolution, as an array in the sink. The maps
+        themselves are written as ``.npy`` by the picture writer."""
+        out = {
             "type": type(self).__name__,
             "map_size": list(self.ssm.shape[-2:]) if self.ssm.dim() == 3 else list(self.image.shape[-2:]),
             "n_axes": len(self),
@@ -77,6 +78,9 @@ class SymmetryMapResult(Result):
             "notes": list(self.notes),
             "seconds": to_jsonable(self.seconds),
         }
+        if sink is not None:
+            out["score_map"] = sink.take(f"{name}.score_map" if name else "score_map", self.score_map.detach().float().cpu().numpy())
+        return out
 
 
 @dataclasses.dataclass(frozen=True)
