@@ -56,8 +56,8 @@ class TestArraySink:
         a, b = sink.take("x", np.zeros(1)), sink.take("x", np.ones(1))
         assert a["$array"] != b["$array"] and len(sink.arrays) == 2
 
-    def test_small_arrays_stay_inline(self):
-        r = _Toy(torch.tensor([1.0, 0.0]), torch.tensor([True]), 0.5, {})
+    def test_small_and_object_arrays_stay_inline(self):
+        r = _Toy(torch.tensor([1.0, 0.0]), torch.tensor([True]), 0.5, {"names": np.array(["a", 1, None], dtype=object)})
         sink = ArraySink(max_inline=2)
         assert r.to_dict(sink) == r.to_dict() and sink.arrays == {}
 

@@ -73,7 +73,7 @@ def to_jsonable(value: Any, sink: ArraySink | None = None, name: str = "") -> An
             return value.tolist()  # NumPy's tolist on a tensor's array is 100x slower
         return to_jsonable(value.numpy())
     if isinstance(value, np.ndarray):
-        if sink is not None and value.size > sink.max_inline:
+        if sink is not None and value.size > sink.max_inline and value.dtype != object:
             return sink.take(name, value)
         if np.issubdtype(value.dtype, np.floating):
             return [to_jsonable(v) for v in value] if value.ndim else to_jsonable(float(value))
