@@ -82,7 +82,9 @@ def _bilinear(img: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     import cv2
 
     n = x.size
-    cols = min(max(n, 1), 4096)  # remap's maps are images: rows and columns below 32767
+    if n == 0:
+        return np.zeros(0, np.float32)
+    cols = min(n, 4096)  # remap's maps are images: rows and columns below 32767
     rows = -(-n // cols)
     mx, my = (np.zeros(rows * cols, np.float32) for _ in range(2))
     mx[:n], my[:n] = x, y
