@@ -377,8 +377,9 @@ def write_report(report: dict, out: Path, n_syn: int) -> None:
         "original size, through `torchsym.detect`. Max F of one score threshold swept over a set of photographs; "
         "thesis criterion = 3 deg and 0.025 min(w, h), challenge = 10 deg and 20 % of GT length. 4 folds of 8 "
         f"(seed {FOLD_SEED}); each fold's candidate is chosen on the other three by a rule (below). "
-        "Times are median wall seconds per photograph on a machine shared with other jobs (load 20-25 on 2 cores "
-        "during the run): they say little about a free core (CPU times: `docs/design/axes.md`).",
+        "Times are median wall seconds per photograph on a machine shared with other jobs (a load of 12-25 on 2 "
+        "cores during the runs; detections carried over from an earlier code version keep their times): they say "
+        "little about a free core (CPU times, A/B: `docs/design/axes.md`).",
         "",
         "## Cross-validated (candidate chosen on 3 folds, scored on the 4th; mean +- spread over folds)",
         "",

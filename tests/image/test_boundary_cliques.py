@@ -70,6 +70,22 @@ class TestBoundaryCliqueAxes:
         again = boundary_clique_axes(img, cliques={"solver": "highs"})
         assert again.axes.shape[0] >= 1
 
+    def test_max_samples_widens_the_stride(self):
+        """Beyond ``segments.max_samples`` the same boundaries are sampled at a wider stride
+        (and the pair slide follows it), not cut short."""
+        from torchsym.image.boundary_cliques.detect import _boundary_samples
+        from torchsym.image.boundary_cliques.settings import BoundaryCliquesSettings
+        from torchsym.image.synthetic import mirrored_objects_image
+
+        img, _ = mirrored_objects_image(2, generator=torch.Generator().manual_seed(7))
+        full, _, stride = _boundary_samples(img[None], BoundaryCliquesSettings(), {})
+        cap = len(full) // 3
+        few, _, wide = _boundary_samples(img[None], BoundaryCliquesSettings(segments={"max_samples": cap}), {})
+        assert stride == 1.5 and 0.8 * cap <= len(few) <= cap and wide == pytest.approx(1.5 * len(full) / cap)
+        assert set(few.curve.tolist()) <= set(full.curve.tolist())
+        span = np.ptp(full.points, axis=0)
+        assert np.allclose(np.ptp(few.points, axis=0), span, atol=2 * wide)  # the same boundaries, end to end
+
     def test_exception(self):
         with pytest.raises(ConfigError, match="edges.detector: expected one of 'edge_drawing', 'canny', got 'sobel'"):
             BoundaryCliqueDetector(edges={"detector": "sobel"})

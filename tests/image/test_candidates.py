@@ -37,6 +37,30 @@ def _angle(l1: np.ndarray, l2: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, abs(float(l1[:2] @ l2[:2])))))
 
 
+def _recounted_candidates(pairs: np.ndarray, height: int, width: int, min_support: int):
+    """The greedy inlier counting of mirror_pair_candidates, every count taken afresh each round."""
+    from torchsym.image.candidates import GATHER_ANGLE, GATHER_DISTANCE, pixel_inliers
+    from torchsym.image.lines import fit_axis
+
+    chord = pairs[:, 2:] - pairs[:, :2]
+    normal = chord / np.linalg.norm(chord, axis=1, keepdims=True)
+    mid = 0.5 * (pairs[:, :2] + pairs[:, 2:])
+    tol = GATHER_DISTANCE * max(height, width)
+    inl = pixel_inliers(pairs, np.concatenate([normal, -(normal * mid).sum(1, keepdims=True)], 1), GATHER_ANGLE, tol)
+    centre, scale = np.array([(width - 1) / 2, (height - 1) / 2]), max(height, width) / 2.0
+    free, out = np.ones(pairs.shape[0], dtype=bool), []
+    while len(out) < 30:
+        counts = np.where(free, inl[free].sum(0), -1)  # recounted every round
+        if counts.max() < min_support:
+            return out
+        j = int(counts.argmax())
+        line = fit_axis(pairs[inl[:, j] & free], centre, scale)
+        members = np.flatnonzero(free & (pixel_inliers(pairs, line[None], GATHER_ANGLE, tol)[:, 0] | inl[:, j]))
+        free[members], free[j] = False, False
+        out.append((line, members))
+    return out
+
+
 class TestSupportRuns:
     def test_split_at_gaps_in_order(self):
         line = _line(30.0, (100, 100))
@@ -79,6 +103,17 @@ class TestMirrorPairCandidates:
         assert mirror_pair_candidates(_pairs_about(line, [0, 5, 10]), 200, 200) == []
         assert len(mirror_pair_candidates(_pairs_about(line, [0, 5, 10]), 200, 200, min_support=3)) == 1
         assert mirror_pair_candidates(np.zeros((0, 4)), 200, 200) == []
+
+    def test_same_candidates_as_recounting(self):
+        """The inlier counts kept up to date give the candidates of recounting every round."""
+        rng = np.random.default_rng(3)
+        lines = [_line(a, (rng.uniform(100, 500), rng.uniform(100, 380))) for a in (10.0, 75.0, 130.0)]
+        pairs = np.concatenate([_pairs_about(ln, rng.uniform(-80, 80, 9), half=rng.uniform(10, 60)) for ln in lines]
+                               + [rng.uniform(0, 480, (60, 4))])
+        pairs[:, :2] += rng.normal(0, 0.5, (pairs.shape[0], 2))
+        got = mirror_pair_candidates(pairs, 480, 640, min_support=2)
+        assert [m.tolist() for _, m in got] == [m.tolist() for _, m in _recounted_candidates(pairs, 480, 640, 2)]
+        assert len(got) >= 3
 
     @pytest.mark.parametrize(("kw", "name", "err"), [
         ({"pairs": np.zeros((5, 3))}, "pairs", InputShapeError),
@@ -138,6 +173,18 @@ class TestSiftCandidates:
         assert "sift" not in boundary_clique_axes(img, score="support").info["stage_seconds"]
         with pytest.raises(ConfigError, match="sift.backend"):
             boundary_clique_axes(img, sift={"backend": "vlfeat"})
+        with pytest.raises(ConfigError, match="sift.min_support"):
+            boundary_clique_axes(img, sift={"min_support": 0})
+
+    def test_min_support(self):
+        """A planted object with three mirrored-SIFT pairs on its axis (seed 1011, OpenCV's
+        SIFT) is a candidate from ``sift.min_support`` 3 on, not at 4."""
+        img, gt = mirrored_objects_image(3, generator=torch.Generator().manual_seed(1011))
+        found = {}
+        for k in (3, 4):
+            res = boundary_clique_axes(img, sift={"min_support": k})
+            found[k] = bool(match_axes(res.axes, gt[2:], image_size=(360, 480), criterion="challenge").any())
+        assert found == {3: True, 4: False}
 
 
 class TestKSymmetryGradientScore:

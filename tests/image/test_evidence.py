@@ -11,7 +11,7 @@ import torch
 
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image import boundary_clique_axes
-from torchsym.image.evidence import EDGE_NOISE, axis_evidence, gradient_noise, mirror_gradients
+from torchsym.image.evidence import EDGE_NOISE, _bilinear, axis_evidence, gradient_noise, mirror_gradients
 from torchsym.image.lines import clip_line_to_image
 
 
@@ -208,3 +208,21 @@ class TestScores:
     def test_bad_settings(self, kw, name):
         with pytest.raises(ConfigError, match=name):
             boundary_clique_axes(torch.rand(3, 32, 32), **kw)
+
+
+class TestBilinear:
+    def test_matches_scipy(self):
+        """OpenCV's remap gives scipy's bilinear values (within its 1/32-px weights) and NaN
+        at the same points outside the image; more points than remap's 32767-row limit."""
+        from scipy.ndimage import map_coordinates
+
+        rng = np.random.default_rng(0)
+        img = cv2.GaussianBlur(rng.random((60, 80)).astype(np.float32), (0, 0), 2.0)
+        x, y = rng.uniform(-3, 83, 40000), rng.uniform(-3, 63, 40000)
+        ref = map_coordinates(img, np.stack([y, x]), order=1, mode="constant", cval=np.nan, prefilter=False)
+        got = _bilinear(img, x, y)
+        assert got.shape == (40000,)
+        assert np.array_equal(np.isnan(got), np.isnan(ref)) and np.isnan(got).any()
+        ok = ~np.isnan(ref)
+        assert np.abs(got[ok] - ref[ok]).max() < 2e-3
+        assert _bilinear(img, np.zeros(0), np.zeros(0)).shape == (0,)

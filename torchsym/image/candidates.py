@@ -128,17 +128,19 @@ def mirror_pair_candidates(
     centre = np.array([(width - 1) / 2, (height - 1) / 2])
     scale = max(height, width) / 2.0
     free = np.ones(pairs.shape[0], dtype=bool)
+    counts = inl.sum(0, dtype=np.int64)  # (P,) free inliers of each pair's axis, kept up to date
     out = []
     while len(out) < max_candidates:
-        counts = (inl & free[:, None]).sum(0)
-        counts[~free] = -1
-        j = int(counts.argmax())
-        if counts[j] < min_support:
+        ranked = np.where(free, counts, -1)
+        j = int(ranked.argmax())
+        if ranked[j] < min_support:
             break
         first = np.flatnonzero(inl[:, j] & free)
         line = fit_axis(pairs[first], centre, scale)
         members = np.union1d(np.flatnonzero(pixel_inliers(pairs, line[None], angle_tol, tol)[:, 0] & free), first)
-        free[members] = False
-        free[j] = False
+        taken = np.union1d(members, [j])
+        taken = taken[free[taken]]
+        counts -= inl[taken].sum(0, dtype=np.int64)
+        free[taken] = False
         out.append((line, members))
     return out

@@ -77,10 +77,20 @@ def gradient_noise(gx: np.ndarray, gy: np.ndarray) -> float:
 
 
 def _bilinear(img: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``img`` at float positions ``(x, y)`` by bilinear interpolation, NaN outside the image."""
-    from scipy.ndimage import map_coordinates
+    """``img (H, W)`` float32 at float positions ``(x, y)`` by bilinear interpolation
+    (OpenCV's ``remap``, weights in steps of 1/32 px), NaN where it reaches outside the image."""
+    import cv2
 
-    return map_coordinates(img, np.stack([y, x]), order=1, mode="constant", cval=np.nan, prefilter=False)
+    n = x.size
+    if n == 0:
+        return np.zeros(0, np.float32)
+    cols = min(n, 4096)  # remap's maps are images: rows and columns below 32767
+    rows = -(-n // cols)
+    mx, my = (np.zeros(rows * cols, np.float32) for _ in range(2))
+    mx[:n], my[:n] = x, y
+    out = cv2.remap(np.asarray(img, np.float32), mx.reshape(rows, cols), my.reshape(rows, cols), cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=float("nan"))
+    return out.reshape(-1)[:n]
 
 
 @dataclasses.dataclass(frozen=True)

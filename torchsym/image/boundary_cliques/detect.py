@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -82,10 +81,9 @@ def _detect(image: torch.Tensor, settings: BoundaryCliquesSettings, generator: t
     tol = settings.axis_distance * max(h, w)
     t0 = time.perf_counter()
     stages: dict[str, float] = {}
-    segs, n_curves = _boundary_samples(img, settings, stages)
+    segs, n_curves, stride = _boundary_samples(img, settings, stages)
     tic = time.perf_counter()
-    pairs = BoundaryPairs.of(segs, theta=settings.theta, min_distance=settings.segments.length,
-                             max_shift=settings.segments.stride)
+    pairs = BoundaryPairs.of(segs, theta=settings.theta, min_distance=settings.segments.length, max_shift=stride)
     stages["pairs"] = time.perf_counter() - tic
     nodes = np.arange(len(pairs))
     if len(pairs) > settings.max_boundary_pairs:
@@ -125,21 +123,29 @@ def _detect(image: torch.Tensor, settings: BoundaryCliquesSettings, generator: t
 
 def _boundary_samples(
     img: torch.Tensor, settings: BoundaryCliquesSettings, stages: dict[str, float]
-) -> tuple[BoundarySegments, int]:
-    """Step 1 (Sec. 2.3.1): boundary curves cut into segments; at most ``max_samples``
-    (every k-th beyond). Returns the segments and the number of curves."""
+) -> tuple[BoundarySegments, int, float]:
+    """Step 1 (Sec. 2.3.1): boundary curves cut into segments every ``segments.stride``
+    px of arc, the stride widened so that at most ``max_samples`` remain (the pair search
+    is quadratic in them). Returns the segments, the number of curves and the stride used
+    (the most a pair's second point slides,
+    :func:`~torchsym.image.boundary_cliques.pairs.symmetric_boundary_pairs`)."""
     e, s = settings.edges, settings.segments
     t0 = time.perf_counter()
     curves, tangent = boundary_curves(img.cpu(), edges=e.detector, sigma=e.sigma, low_threshold=e.low_threshold,
                                       high_threshold=e.high_threshold, min_length=int(s.length))
     stages["edges"] = time.perf_counter() - t0
-    segs = boundary_segments(curves, tangent if s.tangents == "gradient" else None, smooth=s.smooth,
-                             segment_length=s.length, n_samples=s.n_samples, stride=s.stride)
-    if len(segs) > s.max_samples:
-        keep = np.arange(0, len(segs), int(math.ceil(len(segs) / s.max_samples)))
-        segs = BoundarySegments(segs.points[keep], segs.angles[keep], segs.curve[keep])
+    tangent = tangent if s.tangents == "gradient" else None
+    stride = s.stride
+    segs = boundary_segments(curves, tangent, smooth=s.smooth, segment_length=s.length, n_samples=s.n_samples,
+                             stride=stride)
+    if len(segs) > s.max_samples:  # the same arc at a wider stride; each curve keeps its first sample
+        stride *= len(segs) / s.max_samples
+        segs = boundary_segments(curves, tangent, smooth=s.smooth, segment_length=s.length, n_samples=s.n_samples,
+                                 stride=stride)
+        if len(segs) > s.max_samples:
+            segs = BoundarySegments(segs.points[: s.max_samples], segs.angles[: s.max_samples], segs.curve[: s.max_samples])
     stages["segments"] = time.perf_counter() - t0 - stages["edges"]
-    return segs, len(curves)
+    return segs, len(curves), stride
 
 
 def _score_axis(
@@ -164,7 +170,7 @@ def _sift_axes(
     """Axes of mirrored-SIFT pairs (:func:`~torchsym.image.candidates.mirror_pair_candidates`)
     with evidence, scored ``sift.weight`` times; members index past the ``offset`` boundary pairs."""
     out = []
-    for line, run in mirror_pair_candidates(sift_pairs, h, w):
+    for line, run in mirror_pair_candidates(sift_pairs, h, w, min_support=settings.sift.min_support):
         axis = verify_axis(field, line, sift_pairs, run, weight=settings.sift.weight,
                            min_half_width=settings.segments.length / 3, grow_threshold=settings.grow_threshold)
         if axis.score > 0:

@@ -37,7 +37,8 @@ class Segments(Settings):
         "gradient", "gradient: from the smoothed image gradient; chain: differentiating the smoothed chain"
     )
     smooth: float = setting(2.0, "Gaussian smoothing of the pixel chain", unit="px", low=0.0, low_open=True)
-    max_samples: int = setting(3000, "the most boundary samples (every k-th kept beyond)", low=2)
+    max_samples: int = setting(2000, "the most boundary samples (the stride widened beyond; the pair search is "
+                              "quadratic in them)", low=2)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +59,7 @@ class SiftCandidates(Settings):
     enabled: bool | None = setting(None, "add them; null: with score gradient only (they need it)")
     weight: float = setting(0.5, "factor on their axes' scores", low=0.0, low_open=True)
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
+    min_support: int = setting(3, "the least pairs of a candidate (as cliques.min_support)", low=1)
     backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
 
