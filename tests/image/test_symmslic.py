@@ -9,7 +9,8 @@ import torch
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image.symmslic import SymmSlic, SymmSlicSettings, mirror_pixel_pairs, symm_slic
 from torchsym.image.symmslic.settings import MirrorPairSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, slic_iterations
+from torchsym.image.symmslic.connectivity import enforce_connectivity
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, slic_iterations
 from torchsym.image.symmslic.solver import slic_grid
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.metrics.superpixels import (
@@ -264,3 +265,68 @@ def test_refine_axis_photometric_keeps_the_start_without_gain():
     n0, b0 = torch.tensor([1.0, 0.0], dtype=torch.float64), torch.tensor(-40.0, dtype=torch.float64)
     normal, offset = refine_axis_photometric(stack, pts, grads, n0, b0)
     assert normal is n0 and offset is b0
+
+
+class TestAssignment:
+    @staticmethod
+    def _reference(lab: np.ndarray, c: Centres, maps: MirrorMaps, step: int, compactness: float) -> np.ndarray:
+        """SLIC's assignment written out: every unpaired or left centre against every
+        pixel of its 2S x 2S window, the left members with the pixel's and its mirror's
+        colour, on their side of the axis."""
+        h, w = lab.shape[1:]
+        flat = lab.reshape(3, -1).T
+        best = np.full(h * w, np.inf)
+        out = np.full(h * w, -1)
+        for k in range(len(c.xy)):
+            if c.partner[k] >= 0 and not c.left[k]:
+                continue
+            fx, fy = (int(v) for v in np.floor(c.xy[k].numpy()))
+            for y in range(max(0, fy - step), min(h, fy + step)):
+                for x in range(max(0, fx - step), min(w, fx + step)):
+                    p = y * w + x
+                    sp = (compactness / step) ** 2 * ((x - float(c.xy[k, 0])) ** 2 + (y - float(c.xy[k, 1])) ** 2)
+                    d = ((flat[p] - c.lab[k].numpy()) ** 2).sum()
+                    if c.left[k]:
+                        a, q = int(c.axis[k]), int(maps.index[int(c.axis[k]), p])
+                        if q < 0 or not bool(maps.left[a, p]):
+                            continue
+                        d = 0.5 * (d + ((flat[q] - c.lab[int(c.partner[k])].numpy()) ** 2).sum())
+                    if d + sp < best[p]:
+                        best[p], out[p] = d + sp, k
+        return out.reshape(h, w)
+
+    def test_cells_equal_windows(self):
+        """The cell-by-cell assignment gives SLIC's window assignment, with centres
+        crowded into shared cells (the direct path) and a mirror pair."""
+        from torchsym.image.symmslic.assignment import PixelFeatures, assign_labels
+
+        g = torch.Generator().manual_seed(0)
+        h, w, step = 40, 56, 8
+        lab = torch.rand(3, h, w, generator=g) * torch.tensor([255.0, 60.0, 60.0])[:, None, None]
+        n = torch.tensor([[1.0, 0.0]], dtype=torch.float64)
+        b = torch.tensor([-27.5], dtype=torch.float64)
+        maps = MirrorMaps.build(n, b, h, w)
+        grid = slic_grid(h, w, step)
+        xy = grid + (torch.rand(grid.shape, generator=g, dtype=torch.float64) - 0.5) * step * 1.6
+        xy[:, 0].clamp_(0, w - 1)
+        xy[:, 1].clamp_(0, h - 1)
+        k0 = len(xy)
+        left = torch.nonzero(xy[:, 0] < 20)[:, 0][:6]
+        right = xy[left].clone()
+        right[:, 0] = 55.0 - right[:, 0]
+        xy = torch.cat([xy, right])
+        partner = torch.full((len(xy),), -1)
+        partner[left] = k0 + torch.arange(len(left))
+        partner[k0:] = left
+        is_left = torch.zeros(len(xy), dtype=torch.bool)
+        is_left[left] = True
+        axis = torch.where(partner >= 0, 0, -1)
+        colour = torch.rand(len(xy), 3, generator=g, dtype=torch.float64) * torch.tensor([255.0, 60.0, 60.0], dtype=torch.float64)
+        c = Centres(xy, colour, partner, is_left, axis, n, b)
+        feats = PixelFeatures.build(lab.reshape(3, -1).T.contiguous(), (h, w), maps.index, maps.left, step)
+        ours = assign_labels(c, feats, 10.0).numpy()
+        ref = self._reference(lab.numpy().astype(np.float64), c, maps, step, 10.0)
+        cells = (xy.floor().long() // step)[(partner < 0) | is_left]
+        assert len(torch.unique(cells[:, 1] * 100 + cells[:, 0])) < len(cells)  # some cells hold two centres
+        assert np.isin(ref, left.numpy()).any() and (ref >= 0).all()
+        assert (ours == ref).all()

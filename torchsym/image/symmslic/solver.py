@@ -38,13 +38,21 @@ from torchsym.errors import InputShapeError, InputValueError
 from torchsym.image.symmslic.pairs import MirrorPixelPairs, mirror_pixel_pairs, reflect_2d
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.image.symmslic.settings import SymmSlicSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, absorb_slivers, enforce_connectivity, mirror_labels, slic_iterations
+from torchsym.image.symmslic.connectivity import absorb_slivers, enforce_connectivity
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, mirror_labels, slic_iterations
 
 __all__ = ["LAB_SCALE", "SymmSlic", "symm_slic", "symmetric_region"]
 
 #: CIELAB (L in [0, 100]) to OpenCV's 8-bit Lab scale (L in [0, 255]; a, b unchanged), so
 #: that ``compactness`` means what OpenCV's ``ruler`` does
 LAB_SCALE = torch.tensor([255.0 / 100.0, 1.0, 1.0])
+
+
+def _blur(x: np.ndarray) -> np.ndarray:
+    """``x (C, H, W)`` float64 blurred by a Gaussian of 4 px, truncated at 4 sigma, with
+    reflected borders (as ``scipy.ndimage.gaussian_filter``)."""
+    out = cv2.GaussianBlur(np.ascontiguousarray(x.transpose(1, 2, 0)), (33, 33), 4.0, borderType=cv2.BORDER_REFLECT)
+    return out.reshape(x.shape[1], x.shape[2], -1).transpose(2, 0, 1)
 
 
 def _grow(hull: np.ndarray, lab: np.ndarray, normal: np.ndarray, offset: float, min_corr: float) -> np.ndarray:
@@ -60,11 +68,10 @@ def _grow(hull: np.ndarray, lab: np.ndarray, normal: np.ndarray, offset: float, 
     mx, my = mx.clip(0, w - 1), my.clip(0, h - 1)
     x = lab.astype(np.float64)
     y = x[:, my, mx]  # the mirror image
-    sig = (0.0, 4.0, 4.0)
-    mxv, myv = ndimage.gaussian_filter(x, sig), ndimage.gaussian_filter(y, sig)
-    cov = (ndimage.gaussian_filter(x * y, sig) - mxv * myv).sum(0)
-    vx = (ndimage.gaussian_filter(x * x, sig) - mxv**2).sum(0)
-    vy = (ndimage.gaussian_filter(y * y, sig) - myv**2).sum(0)
+    mxv, myv = _blur(x), _blur(y)
+    cov = (_blur(x * y) - mxv * myv).sum(0)
+    vx = (_blur(x * x) - mxv**2).sum(0)
+    vy = (_blur(y * y) - myv**2).sum(0)
     ncc = cov / np.sqrt((vx + 4.0) * (vy + 4.0))
     agree = band & ((ncc >= min_corr) | hull)
     comp, _ = ndimage.label(agree)
