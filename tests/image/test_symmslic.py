@@ -63,7 +63,8 @@ class TestSymmSlic:
         import kornia
 
         lab = kornia.color.rgb_to_lab(img[None])[0]
-        from torchsym.image.symmslic.solver import _init_centres, symmetric_region
+        from torchsym.image.symmslic.region import symmetric_region
+        from torchsym.image.symmslic.solver import _init_centres
         from torchsym.image.symmslic.pairs import MirrorPixelPairs
 
         none = torch.zeros(0, 2, dtype=torch.float64)
@@ -239,7 +240,7 @@ def test_symmetric_region_grows_through_mirrored_colour():
     """On an image mirrored about x = 99.5, the hull of a few central pairs grows to the
     whole image, and stays the hull with ``min_corr`` 1; a flat image does not grow."""
     from torchsym.image.symmslic.pairs import MirrorPixelPairs
-    from torchsym.image.symmslic.solver import symmetric_region
+    from torchsym.image.symmslic.region import symmetric_region
 
     half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(0)), size=(80, 100), mode="bilinear")[0]
     lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200), mirrored
@@ -253,6 +254,22 @@ def test_symmetric_region_grows_through_mirrored_colour():
     assert 0 < (hull >= 0).mean() < 0.05
     assert (grown >= 0).mean() > 0.99
     np.testing.assert_array_equal(flat, hull)
+
+
+def test_mirror_correlation():
+    """About the axis of a mirrored image every pixel correlates with its mirror (about 1);
+    about another axis, and on a flat image, far less; the band is the pixels whose mirror
+    lies in the image."""
+    from torchsym.image.symmslic import mirror_correlation
+
+    half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(1)), size=(80, 100), mode="bilinear")[0]
+    lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200)
+    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -99.5)
+    assert band.all() and np.median(ncc) > 0.95
+    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -49.5)
+    assert 0.45 < band.mean() < 0.55 and np.median(ncc[band]) < 0.6
+    ncc, _, _ = mirror_correlation(np.full_like(lab, 50.0), np.array([1.0, 0.0]), -99.5)
+    assert np.abs(ncc).max() < 1e-6
 
 
 def test_refine_axis_photometric_keeps_the_start_without_gain():
