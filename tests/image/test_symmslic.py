@@ -74,7 +74,7 @@ class TestSymmSlic:
         c = _init_centres(lab, grad, region, n[None], b[None], 18)
         maps = MirrorMaps.build(n[None], b[None], 160, 200)
         for it in range(1, 5):
-            labels = slic_iterations(lab, c, maps, 18, 10.0, it)
+            labels, _ = slic_iterations(lab, c, maps, 18, 10.0, it)
             for k in torch.nonzero(c.left)[:, 0][:10].tolist():
                 p = c.partner[k]
                 mirrored = c.xy[k] - 2 * (c.xy[k] @ n + b) * n

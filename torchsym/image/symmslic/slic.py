@@ -118,16 +118,25 @@ def _update(points: torch.Tensor, labels: torch.Tensor, c: Centres) -> None:
         c.xy[right] = _reflect(c.xy[src], c.normals[c.axis[src]], c.offsets[c.axis[src]])
 
 
-def slic_iterations(lab: torch.Tensor, c: Centres, maps: MirrorMaps, step: int, compactness: float, max_iters: int) -> torch.Tensor:
-    """``max_iters`` rounds of symmetric assignment and update on ``lab (3, H, W)``;
-    returns the labels ``(H, W)`` of the last assignment (-1 where no window reached)."""
+def slic_iterations(
+    lab: torch.Tensor, c: Centres, maps: MirrorMaps, step: int, compactness: float, max_iters: int, tol_shift: float = 0.0
+) -> tuple[torch.Tensor, int]:
+    """Rounds of symmetric assignment and update on ``lab (3, H, W)``, at most
+    ``max_iters``, fewer once the centres moved less than ``tol_shift`` px on average
+    (SLIC's residual error over the centres, L1). Returns the labels ``(H, W)`` of the last
+    assignment (-1 where no window reached) and the rounds run."""
     shape = (lab.shape[1], lab.shape[2])
     flat = lab.reshape(3, -1).T.contiguous().float()  # (H W, 3)
     feats = PixelFeatures.build(flat, shape, maps.index, maps.left, step)
     ys, xs = torch.meshgrid(torch.arange(shape[0], dtype=torch.float64), torch.arange(shape[1], dtype=torch.float64), indexing="ij")
     points = torch.cat([xs.reshape(-1, 1), ys.reshape(-1, 1), flat.double()], 1)  # (H W, 5)
     labels = mirror_labels(assign_labels(c, feats, compactness), c, maps)
-    for _ in range(max_iters - 1):
+    rounds = 1
+    while rounds < max_iters:
+        before = c.xy.clone()
         _update(points, labels, c)
         labels = mirror_labels(assign_labels(c, feats, compactness), c, maps)
-    return labels
+        rounds += 1
+        if float((c.xy - before).abs().sum(1).mean()) < tol_shift:
+            break
+    return labels, rounds

@@ -193,7 +193,7 @@ def symm_slic(
     timings["init"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     maps = MirrorMaps.build(normals, offsets, h, w)
-    labels = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters)
+    labels, _ = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters, settings.tol_shift)
     timings["slic"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     active = ((c.partner < 0) | c.left).numpy()
