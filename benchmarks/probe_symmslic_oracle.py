@@ -21,6 +21,10 @@ told the mask's own best reflection axis, and masks built from it:
   ``ncc >= t``;
 * ``pairs on the axis``: those pairs' connected pieces that reach the axis (a symmetric
   object straddles its axis);
+* ``edge hull``: the thesis's own route (Sec. 4.3.1 with 4.2.2's region) told the axis:
+  the convex hull of the boundary pixels (Edge Drawing chains) that have a mirror
+  boundary pixel within 1.5 px with a mirrored gradient, and of their reflections; and
+  ``edge hull pairs``, the union of the mirror pairs at least half inside that hull;
 * ``oracle pairs``: the union of the mirror pairs at least half inside the true object
   (what selecting superpixel pairs could reach at best).
 
@@ -43,13 +47,16 @@ import cv2
 import kornia
 import numpy as np
 import torch
+import torch.nn.functional as F
 from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_segmentation as seg  # noqa: E402
 import bench_superpixels as sup  # noqa: E402
 
+from torchsym.image.boundary import boundary_curves  # noqa: E402
 from torchsym.image.symmslic import mirror_correlation, symm_slic  # noqa: E402
+from torchsym.image.symmslic.pairs import mirror_edge_matches  # noqa: E402
 from torchsym.image.symmslic.solver import LAB_SCALE  # noqa: E402
 from torchsym.io import read_image  # noqa: E402
 from torchsym.metrics.masks import best_reflection_iou  # noqa: E402
@@ -104,6 +111,29 @@ def mirror_part() -> list[dict]:
     return rows
 
 
+def edge_hull(image: torch.Tensor, normal: np.ndarray, offset: float) -> np.ndarray:
+    """``(H, W)`` bool convex hull of the boundary pixels with a mirror boundary pixel about
+    the axis, and of their reflections (all False with fewer than 3)."""
+    im = image.reshape(-1, *image.shape[-3:])[:1].float()
+    h, w = im.shape[-2:]
+    chains, _ = boundary_curves(im, edges="edge_drawing", sigma=2.0, min_length=20)
+    if not chains:
+        return np.zeros((h, w), bool)
+    gy, gx = np.gradient(im[0].mean(0).numpy())
+    grad = F.normalize(torch.from_numpy(np.stack([gx, gy], -1)).float(), dim=-1)
+    edges = torch.from_numpy(np.concatenate([np.asarray(c, dtype=np.float64) for c in chains]))
+    eg = grad[edges[:, 1].round().long().clamp(0, h - 1), edges[:, 0].round().long().clamp(0, w - 1)].double()
+    corners = torch.tensor([[0.0, 0.0], [w - 1.0, h - 1.0]], dtype=torch.float64)
+    n = torch.as_tensor(normal, dtype=torch.float64)
+    matched, _ = mirror_edge_matches(edges, eg, corners[:1], corners[1:], n, torch.tensor(offset, dtype=torch.float64), radius=1.5)
+    pts = edges[matched].numpy()
+    out = np.zeros((h, w), np.uint8)
+    if len(pts) >= 3:
+        refl = pts - 2 * (pts @ normal + offset)[:, None] * np.asarray(normal)[None]
+        cv2.fillConvexPoly(out, cv2.convexHull(np.concatenate([pts, refl]).round().astype(np.int32)), 1)
+    return out > 0
+
+
 def _symmetric(mask: np.ndarray, mx: np.ndarray, my: np.ndarray, band: np.ndarray) -> np.ndarray:
     return mask | (mask[my, mx] & band)
 
@@ -141,7 +171,10 @@ def seg_part() -> list[dict]:
             keep[pairs[sel].reshape(-1)] = True
             return keep[labels]
 
+        hull = edge_hull(img, np.asarray(n, dtype=np.float64), float(off))
+        in_hull = np.bincount(labels.reshape(-1), weights=hull.reshape(-1).astype(float), minlength=k) / np.maximum(size, 1)
         row = {"name": f"{st}/{name}", "set": st, "object_share": float(obj.mean()), "band": err(r.mask.numpy()),
+               "edge_hull": err(hull), "edge_hull_pairs": err(union(in_hull[pairs[:, 0]] >= 0.5)),
                "oracle_pairs": err(union(inside[pairs[:, 0]] >= 0.5))}
         for t in THRESHOLDS:
             px = _symmetric(band & (ncc >= t), mx, my, band)
@@ -165,7 +198,7 @@ def seg_summary(rows: list[dict]) -> list[str]:
              "| t chosen on Berkeley -> error on GrabCut (held out) / Berkeley (in-sample) | all 40 |", "|---|---|---|---|"]
     lines.append(f"| empty mask (object share) | {mean(sets['Berkeley'], 'object_share'):.3f} / {mean(sets['GrabCut'], 'object_share'):.3f} "
                  f"| {mean(sets['GrabCut'], 'object_share'):.3f} / {mean(sets['Berkeley'], 'object_share'):.3f} | {mean(rows, 'object_share'):.3f} |")
-    for key in ("band", "oracle_pairs"):
+    for key in ("band", "edge_hull", "edge_hull_pairs", "oracle_pairs"):
         lines.append(f"| {key} | {mean(sets['Berkeley'], key):.3f} / {mean(sets['GrabCut'], key):.3f} | "
                      f"{mean(sets['GrabCut'], key):.3f} / {mean(sets['Berkeley'], key):.3f} | {mean(rows, key):.3f} |")
     for key in ("ncc", "pairs", "axis_pairs"):
