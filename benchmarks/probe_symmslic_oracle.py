@@ -7,7 +7,11 @@ axis, within the band its segment spans, for every method): SymmSLIC as shipped,
 axis-support gate off (``pairs.min_support`` 0), and told the true axis; OpenCV's SLIC,
 SLICO and LSC in the same run. Per photo: whether SymmSLIC's strongest axis agrees with
 the truth (within 10 degrees, and the truth segment's midpoint within 10 % of the image
-diagonal of it).
+diagonal of it). Each method is also scored about the best of the axes near the annotated
+one (rotated about the segment's midpoint by up to 1.5 degrees in steps of 0.5 and shifted
+by up to 4 px in steps of 2: ``tolerant``), the same search for every method, since an
+annotated axis is itself only so precise and the measure drops steeply off the axis
+(SymmSLIC told the annotated axis and scored about it rotated by 0.5 degrees: about 0.65).
 
 Part ``segmentation`` (the 40 images of ``benchmarks/data/symmetric_masks.txt``): SymmSLIC
 told the mask's own best reflection axis, and masks built from it:
@@ -75,6 +79,17 @@ def agrees(normals: torch.Tensor, offsets: torch.Tensor, nrm: np.ndarray, seg_xy
     return angle <= 10 and abs(float(n @ mid + float(offsets[0]))) <= 0.1 * diag
 
 
+def tolerant(labels: np.ndarray, nrm: np.ndarray, mid: np.ndarray, region: np.ndarray) -> float:
+    """Mirror consistency about the best axis near ``nrm`` through ``mid`` (see the docstring)."""
+    best = 0.0
+    theta = math.atan2(nrm[1], nrm[0])
+    for da in np.arange(-1.5, 1.51, 0.5):
+        n = np.array([math.cos(theta + math.radians(da)), math.sin(theta + math.radians(da))])
+        for shift in (-4.0, -2.0, 0.0, 2.0, 4.0):
+            best = max(best, mirror_consistency(labels, n, -float(n @ mid) + shift, region=region))
+    return best
+
+
 def mirror_part() -> list[dict]:
     truth: dict[str, list[float]] = {}
     for line in (DEV / "axes.txt").read_text().splitlines():
@@ -95,17 +110,21 @@ def mirror_part() -> list[dict]:
         region = sup.band(rgb.shape[:2], s)
         img = torch.from_numpy(rgb).permute(2, 0, 1).float() / 255.0
         diag = math.hypot(*rgb.shape[:2])
+        mid = np.array([(s[0] + s[2]) / 2, (s[1] + s[3]) / 2])
         row: dict = {"image": name}
         for key, kw in (("default", {}), ("gate_off", {"pairs": {"min_support": 0.0}}),
                         ("true_axis", {"axes": torch.tensor([[nrm[0], nrm[1], off]])})):
             axes = kw.pop("axes", None)
             r = symm_slic(img, kw, axes=axes)
             row[key] = mirror_consistency(r.labels.numpy(), nrm, off, region=region)
+            row[f"{key}_tolerant"] = tolerant(r.labels.numpy(), nrm, mid, region)
             if axes is None:
                 row[f"{key}_found"] = len(r.normals) > 0
                 row[f"{key}_agrees"] = agrees(r.normals, r.offsets, nrm, s, diag)
         for m, fn in peers.items():
-            row[m] = mirror_consistency(fn(rgb, 500), nrm, off, region=region)
+            labels = fn(rgb, 500)
+            row[m] = mirror_consistency(labels, nrm, off, region=region)
+            row[f"{m}_tolerant"] = tolerant(labels, nrm, mid, region)
         rows.append(row)
         print(row, flush=True)
     return rows
@@ -222,8 +241,9 @@ def main(argv: list[str]) -> int:
     if "mirror" in parts:
         rows = mirror_part()
         keys = ("default", "gate_off", "true_axis", "slic", "slico", "lsc")
-        text = ["| method | mirror consistency, 32 dev photos (mean) |", "|---|---|"]
-        text += [f"| {k} | {statistics.fmean(r[k] for r in rows):.3f} |" for k in keys]
+        text = ["| method | mirror consistency about the annotated axis, 32 dev photos (mean) | about the best axis within 1.5 deg / 4 px of it |",
+                "|---|---|---|"]
+        text += [f"| {k} | {statistics.fmean(r[k] for r in rows):.3f} | {statistics.fmean(r[k + '_tolerant'] for r in rows):.3f} |" for k in keys]
         for key in ("default", "gate_off"):
             ag = [r for r in rows if r[f"{key}_agrees"]]
             text.append(f"\n{key}: axis found on {sum(r[f'{key}_found'] for r in rows)} of {len(rows)}, agrees with the truth on "
