@@ -156,6 +156,27 @@ class TestSlicSteps:
         out, origin = enforce_connectivity(labels, 3, np.ones(2, dtype=bool))
         assert len(np.unique(out)) == 3 and sorted(origin.tolist()) == [0, 0, 1]
 
+    def test_iterations_stop_on_small_shift(self):
+        """``tol_shift`` 0 runs every round; a tolerance larger than any move stops after
+        the first update, still with mirror pairs."""
+        from torchsym.image.symmslic.region import symmetric_region
+        from torchsym.image.symmslic.pairs import MirrorPixelPairs
+        from torchsym.image.symmslic.solver import _init_centres
+
+        img, ax = _mirrored(4)
+        n, b = ax[:, :2], ax[:, 2]
+        none = torch.zeros(0, 2, dtype=torch.float64)
+        found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), n, b, torch.zeros(1, dtype=torch.float64))
+        lab = torch.rand(3, 160, 200, generator=torch.Generator().manual_seed(0)) * 100
+        maps = MirrorMaps.build(n, b, 160, 200)
+        rounds = []
+        for tol in (0.0, 1e9):
+            c = _init_centres(lab, torch.zeros(160, 200, dtype=torch.float64), symmetric_region(found, n, b, 160, 200), n, b, 18)
+            labels, r = slic_iterations(lab, c, maps, 18, 10.0, 6, tol)
+            rounds.append(r)
+            assert bool(c.left.any()) and set(torch.unique(labels).tolist()) >= set(c.partner[c.left].tolist())
+        assert rounds == [6, 2]
+
     def test_grid(self):
         g = slic_grid(321, 481, 18)
         assert len(g) == 18 * 27 and g[0].tolist() == [9.0, 9.0]
