@@ -5,7 +5,8 @@ Steps, as Algorithm 4:
 1. mirror pixel pairs and their axes (Sec. 4.2.1, :mod:`.pairs`);
 2. symmetric initialisation: SLIC's grid outside the symmetric region (the convex hull of
    the pairs), mirror pairs of centres inside it;
-3. symmetric assignment and centre updates until the iterations run out (:mod:`.slic`);
+3. symmetric assignment and centre updates until the centres settle ("till
+   convergence": a mean move under ``tol_shift``) or ``max_iters`` (:mod:`.slic`);
 4. connectivity enforced as SLIC does (each large enough piece its own superpixel, the
    rest merged), on the left members, whose pieces then get their mirror partners.
 
