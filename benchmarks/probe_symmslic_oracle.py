@@ -233,6 +233,11 @@ def seg_summary(rows: list[dict]) -> list[str]:
     return lines
 
 
+def header(part: str) -> str:
+    return (f"# Probe: SymmSLIC with oracle axes ({part})\n\n`PYTHONPATH=. python benchmarks/probe_symmslic_oracle.py {part}` "
+            "(see its docstring), one thread; the machine's load is not recorded here.\n\n")
+
+
 def main(argv: list[str]) -> int:
     torch.set_num_threads(1)
     cv2.setNumThreads(1)
@@ -251,13 +256,13 @@ def main(argv: list[str]) -> int:
                         f"told the axis there {statistics.fmean(r['true_axis'] for r in ag) if ag else float('nan'):.3f}")
         print("\n".join(text))
         (out / "symmslic_oracle_mirror.json").write_text(json.dumps(rows, indent=1))
-        (out / "symmslic_oracle_mirror.md").write_text("\n".join(text) + "\n")
+        (out / "symmslic_oracle_mirror.md").write_text(header("mirror") + "\n".join(text) + "\n")
     if "segmentation" in parts:
         rows = seg_part()
         text = seg_summary(rows)
         print("\n".join(text))
         (out / "symmslic_oracle_segmentation.json").write_text(json.dumps(rows, indent=1))
-        (out / "symmslic_oracle_segmentation.md").write_text("\n".join(text) + "\n")
+        (out / "symmslic_oracle_segmentation.md").write_text(header("segmentation") + "\n".join(text) + "\n")
     return 0
 
 
