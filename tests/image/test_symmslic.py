@@ -9,7 +9,8 @@ import torch
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.image.symmslic import SymmSlic, SymmSlicSettings, mirror_pixel_pairs, symm_slic
 from torchsym.image.symmslic.settings import MirrorPairSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, enforce_connectivity, slic_iterations
+from torchsym.image.symmslic.connectivity import enforce_connectivity
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, slic_iterations
 from torchsym.image.symmslic.solver import slic_grid
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.metrics.superpixels import (
@@ -62,7 +63,8 @@ class TestSymmSlic:
         import kornia
 
         lab = kornia.color.rgb_to_lab(img[None])[0]
-        from torchsym.image.symmslic.solver import _init_centres, symmetric_region
+        from torchsym.image.symmslic.region import symmetric_region
+        from torchsym.image.symmslic.solver import _init_centres
         from torchsym.image.symmslic.pairs import MirrorPixelPairs
 
         none = torch.zeros(0, 2, dtype=torch.float64)
@@ -72,7 +74,7 @@ class TestSymmSlic:
         c = _init_centres(lab, grad, region, n[None], b[None], 18)
         maps = MirrorMaps.build(n[None], b[None], 160, 200)
         for it in range(1, 5):
-            labels = slic_iterations(lab, c, maps, 18, 10.0, it)
+            labels, _ = slic_iterations(lab, c, maps, 18, 10.0, it)
             for k in torch.nonzero(c.left)[:, 0][:10].tolist():
                 p = c.partner[k]
                 mirrored = c.xy[k] - 2 * (c.xy[k] @ n + b) * n
@@ -153,6 +155,27 @@ class TestSlicSteps:
         labels = np.array([[0, 0, 1, 1, 0, 0]] * 3)
         out, origin = enforce_connectivity(labels, 3, np.ones(2, dtype=bool))
         assert len(np.unique(out)) == 3 and sorted(origin.tolist()) == [0, 0, 1]
+
+    def test_iterations_stop_on_small_shift(self):
+        """``tol_shift`` 0 runs every round; a tolerance larger than any move stops after
+        the first update, still with mirror pairs."""
+        from torchsym.image.symmslic.region import symmetric_region
+        from torchsym.image.symmslic.pairs import MirrorPixelPairs
+        from torchsym.image.symmslic.solver import _init_centres
+
+        img, ax = _mirrored(4)
+        n, b = ax[:, :2], ax[:, 2]
+        none = torch.zeros(0, 2, dtype=torch.float64)
+        found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), n, b, torch.zeros(1, dtype=torch.float64))
+        lab = torch.rand(3, 160, 200, generator=torch.Generator().manual_seed(0)) * 100
+        maps = MirrorMaps.build(n, b, 160, 200)
+        rounds = []
+        for tol in (0.0, 1e9):
+            c = _init_centres(lab, torch.zeros(160, 200, dtype=torch.float64), symmetric_region(found, n, b, 160, 200), n, b, 18)
+            labels, r = slic_iterations(lab, c, maps, 18, 10.0, 6, tol)
+            rounds.append(r)
+            assert bool(c.left.any()) and set(torch.unique(labels).tolist()) >= set(c.partner[c.left].tolist())
+        assert rounds == [6, 2]
 
     def test_grid(self):
         g = slic_grid(321, 481, 18)
@@ -238,7 +261,7 @@ def test_symmetric_region_grows_through_mirrored_colour():
     """On an image mirrored about x = 99.5, the hull of a few central pairs grows to the
     whole image, and stays the hull with ``min_corr`` 1; a flat image does not grow."""
     from torchsym.image.symmslic.pairs import MirrorPixelPairs
-    from torchsym.image.symmslic.solver import symmetric_region
+    from torchsym.image.symmslic.region import symmetric_region
 
     half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(0)), size=(80, 100), mode="bilinear")[0]
     lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200), mirrored
@@ -254,6 +277,22 @@ def test_symmetric_region_grows_through_mirrored_colour():
     np.testing.assert_array_equal(flat, hull)
 
 
+def test_mirror_correlation():
+    """About the axis of a mirrored image every pixel correlates with its mirror (about 1);
+    about another axis, and on a flat image, far less; the band is the pixels whose mirror
+    lies in the image."""
+    from torchsym.image.symmslic import mirror_correlation
+
+    half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(1)), size=(80, 100), mode="bilinear")[0]
+    lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200)
+    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -99.5)
+    assert band.all() and np.median(ncc) > 0.95
+    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -49.5)
+    assert 0.45 < band.mean() < 0.55 and np.median(ncc[band]) < 0.6
+    ncc, _, _ = mirror_correlation(np.full_like(lab, 50.0), np.array([1.0, 0.0]), -99.5)
+    assert np.abs(ncc).max() < 1e-6
+
+
 def test_refine_axis_photometric_keeps_the_start_without_gain():
     """On a flat image nothing lowers the cost: the start comes back unchanged."""
     from torchsym.image.symmslic.pairs import intensity_stack, refine_axis_photometric
@@ -264,3 +303,68 @@ def test_refine_axis_photometric_keeps_the_start_without_gain():
     n0, b0 = torch.tensor([1.0, 0.0], dtype=torch.float64), torch.tensor(-40.0, dtype=torch.float64)
     normal, offset = refine_axis_photometric(stack, pts, grads, n0, b0)
     assert normal is n0 and offset is b0
+
+
+class TestAssignment:
+    @staticmethod
+    def _reference(lab: np.ndarray, c: Centres, maps: MirrorMaps, step: int, compactness: float) -> np.ndarray:
+        """SLIC's assignment written out: every unpaired or left centre against every
+        pixel of its 2S x 2S window, the left members with the pixel's and its mirror's
+        colour, on their side of the axis."""
+        h, w = lab.shape[1:]
+        flat = lab.reshape(3, -1).T
+        best = np.full(h * w, np.inf)
+        out = np.full(h * w, -1)
+        for k in range(len(c.xy)):
+            if c.partner[k] >= 0 and not c.left[k]:
+                continue
+            fx, fy = (int(v) for v in np.floor(c.xy[k].numpy()))
+            for y in range(max(0, fy - step), min(h, fy + step)):
+                for x in range(max(0, fx - step), min(w, fx + step)):
+                    p = y * w + x
+                    sp = (compactness / step) ** 2 * ((x - float(c.xy[k, 0])) ** 2 + (y - float(c.xy[k, 1])) ** 2)
+                    d = ((flat[p] - c.lab[k].numpy()) ** 2).sum()
+                    if c.left[k]:
+                        a, q = int(c.axis[k]), int(maps.index[int(c.axis[k]), p])
+                        if q < 0 or not bool(maps.left[a, p]):
+                            continue
+                        d = 0.5 * (d + ((flat[q] - c.lab[int(c.partner[k])].numpy()) ** 2).sum())
+                    if d + sp < best[p]:
+                        best[p], out[p] = d + sp, k
+        return out.reshape(h, w)
+
+    def test_cells_equal_windows(self):
+        """The cell-by-cell assignment gives SLIC's window assignment, with centres
+        crowded into shared cells (the direct path) and a mirror pair."""
+        from torchsym.image.symmslic.assignment import PixelFeatures, assign_labels
+
+        g = torch.Generator().manual_seed(0)
+        h, w, step = 40, 56, 8
+        lab = torch.rand(3, h, w, generator=g) * torch.tensor([255.0, 60.0, 60.0])[:, None, None]
+        n = torch.tensor([[1.0, 0.0]], dtype=torch.float64)
+        b = torch.tensor([-27.5], dtype=torch.float64)
+        maps = MirrorMaps.build(n, b, h, w)
+        grid = slic_grid(h, w, step)
+        xy = grid + (torch.rand(grid.shape, generator=g, dtype=torch.float64) - 0.5) * step * 1.6
+        xy[:, 0].clamp_(0, w - 1)
+        xy[:, 1].clamp_(0, h - 1)
+        k0 = len(xy)
+        left = torch.nonzero(xy[:, 0] < 20)[:, 0][:6]
+        right = xy[left].clone()
+        right[:, 0] = 55.0 - right[:, 0]
+        xy = torch.cat([xy, right])
+        partner = torch.full((len(xy),), -1)
+        partner[left] = k0 + torch.arange(len(left))
+        partner[k0:] = left
+        is_left = torch.zeros(len(xy), dtype=torch.bool)
+        is_left[left] = True
+        axis = torch.where(partner >= 0, 0, -1)
+        colour = torch.rand(len(xy), 3, generator=g, dtype=torch.float64) * torch.tensor([255.0, 60.0, 60.0], dtype=torch.float64)
+        c = Centres(xy, colour, partner, is_left, axis, n, b)
+        feats = PixelFeatures.build(lab.reshape(3, -1).T.contiguous(), (h, w), maps.index, maps.left, step)
+        ours = assign_labels(c, feats, 10.0).numpy()
+        ref = self._reference(lab.numpy().astype(np.float64), c, maps, step, 10.0)
+        cells = (xy.floor().long() // step)[(partner < 0) | is_left]
+        assert len(torch.unique(cells[:, 1] * 100 + cells[:, 0])) < len(cells)  # some cells hold two centres
+        assert np.isin(ref, left.numpy()).any() and (ref >= 0).all()
+        assert (ours == ref).all()

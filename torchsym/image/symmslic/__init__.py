@@ -3,7 +3,8 @@
 from torchsym.image.symmslic.pairs import MirrorPixelPairs, mirror_pixel_pairs
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.image.symmslic.settings import MirrorPairSettings, SymmSlicSettings
-from torchsym.image.symmslic.solver import SymmSlic, symm_slic, symmetric_region
+from torchsym.image.symmslic.region import mirror_correlation, symmetric_region
+from torchsym.image.symmslic.solver import SymmSlic, symm_slic
 
 __all__ = [
     "MirrorPairSettings",
@@ -11,6 +12,7 @@ __all__ = [
     "SymmSlic",
     "SymmSlicResult",
     "SymmSlicSettings",
+    "mirror_correlation",
     "mirror_pixel_pairs",
     "symm_slic",
     "symmetric_region",

@@ -29,7 +29,7 @@ import torch.nn.functional as F
 from torchsym.image.boundary import boundary_curves
 from torchsym.image.symmslic.settings import MirrorPairSettings
 
-__all__ = ["MirrorPixelPairs", "curve_samples", "intensity_stack", "mirror_pixel_pairs", "refine_axis_photometric", "reflect_2d"]
+__all__ = ["MirrorPixelPairs", "curve_samples", "intensity_stack", "mirror_edge_matches", "mirror_pixel_pairs", "refine_axis_photometric", "reflect_2d"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,7 +81,7 @@ def curve_samples(chains: list[np.ndarray], *, length: float, n_samples: int, st
     return np.concatenate(centres), np.concatenate(curves)
 
 
-def _matches(
+def mirror_edge_matches(
     points: torch.Tensor,
     grads: torch.Tensor,
     p: torch.Tensor,
@@ -113,7 +113,7 @@ def _matches(
 
 
 def _support(matched: torch.Tensor, inside: torch.Tensor) -> float:
-    """Share of the edge pixels considered (see :func:`_matches`) that have a mirror
+    """Share of the edge pixels considered (see :func:`mirror_edge_matches`) that have a mirror
     edge: high on a symmetric object, a few percent for edges that only chance pairs up."""
     return float(matched.sum()) / int(inside.sum()) if int(inside.sum()) >= 2 else 0.0
 
@@ -259,10 +259,10 @@ def mirror_pixel_pairs(
         chord = torch.where((chord @ peak < 0)[:, None], -chord, chord)
         normal = F.normalize(chord.mean(0), dim=0)  # the axis refitted to its pairs
         offset = -(0.5 * (p + q) @ normal).median()
-        m, _ = _matches(x.double(), g.double(), p, q, normal, offset)
+        m, _ = mirror_edge_matches(x.double(), g.double(), p, q, normal, offset)
         if int(m.sum()) >= 3:  # the axis refined on the edges that have a mirror edge
             normal, offset = refine_axis_photometric(stack, x.double()[m], g.double()[m], normal, offset)
-        m, inside = _matches(edges, edge_grads, p, q, normal, offset, radius=1.5)
+        m, inside = mirror_edge_matches(edges, edge_grads, p, q, normal, offset, radius=1.5)
         if _support(m, inside) < s.min_support:
             continue
         side = p @ normal + offset

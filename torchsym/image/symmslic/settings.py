@@ -40,6 +40,9 @@ class SymmSlicSettings(Settings):
         10.0, "SLIC's compactness m, as OpenCV's ruler (colour in OpenCV's 8-bit Lab); the thesis's lambda, 1 to 40", low=0.0, low_open=True
     )
     max_iters: int = setting(10, "k-means iterations", low=1)
+    tol_shift: float = setting(
+        1.5, "stop before max_iters once the centres move less than this on average between iterations (SLIC's residual error, L1; the thesis: till convergence)", unit="px", low=0.0
+    )
     pairs: MirrorPairSettings = group(MirrorPairSettings)
     min_mirror_correlation: float = setting(
         0.8,

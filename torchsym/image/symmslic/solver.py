@@ -5,7 +5,8 @@ Steps, as Algorithm 4:
 1. mirror pixel pairs and their axes (Sec. 4.2.1, :mod:`.pairs`);
 2. symmetric initialisation: SLIC's grid outside the symmetric region (the convex hull of
    the pairs), mirror pairs of centres inside it;
-3. symmetric assignment and centre updates until the iterations run out (:mod:`.slic`);
+3. symmetric assignment and centre updates until the centres settle ("till
+   convergence": a mean move under ``tol_shift``) or ``max_iters`` (:mod:`.slic`);
 4. connectivity enforced as SLIC does (each large enough piece its own superpixel, the
    rest merged), on the left members, whose pieces then get their mirror partners.
 
@@ -24,84 +25,27 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
-import cv2
 import kornia
 import numpy as np
 import torch
-from scipy import ndimage
 
 from torchsym.core.checks import check_image
 from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError, InputValueError
+from torchsym.image.symmslic.connectivity import absorb_slivers, enforce_connectivity
 from torchsym.image.symmslic.pairs import MirrorPixelPairs, mirror_pixel_pairs, reflect_2d
+from torchsym.image.symmslic.region import symmetric_region
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.image.symmslic.settings import SymmSlicSettings
-from torchsym.image.symmslic.slic import Centres, MirrorMaps, absorb_slivers, enforce_connectivity, mirror_labels, slic_iterations
+from torchsym.image.symmslic.slic import Centres, MirrorMaps, mirror_labels, slic_iterations
 
-__all__ = ["LAB_SCALE", "SymmSlic", "symm_slic", "symmetric_region"]
+__all__ = ["LAB_SCALE", "SymmSlic", "symm_slic"]
 
 #: CIELAB (L in [0, 100]) to OpenCV's 8-bit Lab scale (L in [0, 255]; a, b unchanged), so
 #: that ``compactness`` means what OpenCV's ``ruler`` does
 LAB_SCALE = torch.tensor([255.0 / 100.0, 1.0, 1.0])
-
-
-def _grow(hull: np.ndarray, lab: np.ndarray, normal: np.ndarray, offset: float, min_corr: float) -> np.ndarray:
-    """``hull (H, W)`` bool grown through the pixels whose neighbourhood (Gaussian, 4 px)
-    correlates with the mirror image's at least ``min_corr`` (normalised cross-correlation
-    over the 3 channels of ``lab (3, H, W)``; a flat patch, variance under 4, correlates
-    with nothing), keeping the pixels whose mirror lies in the image, then made symmetric."""
-    h, w = hull.shape
-    ys, xs = np.mgrid[0:h, 0:w]
-    d = xs * normal[0] + ys * normal[1] + offset
-    mx, my = np.round(xs - 2 * d * normal[0]).astype(np.int64), np.round(ys - 2 * d * normal[1]).astype(np.int64)
-    band = (mx >= 0) & (mx < w) & (my >= 0) & (my < h)
-    mx, my = mx.clip(0, w - 1), my.clip(0, h - 1)
-    x = lab.astype(np.float64)
-    y = x[:, my, mx]  # the mirror image
-    sig = (0.0, 4.0, 4.0)
-    mxv, myv = ndimage.gaussian_filter(x, sig), ndimage.gaussian_filter(y, sig)
-    cov = (ndimage.gaussian_filter(x * y, sig) - mxv * myv).sum(0)
-    vx = (ndimage.gaussian_filter(x * x, sig) - mxv**2).sum(0)
-    vy = (ndimage.gaussian_filter(y * y, sig) - myv**2).sum(0)
-    ncc = cov / np.sqrt((vx + 4.0) * (vy + 4.0))
-    agree = band & ((ncc >= min_corr) | hull)
-    comp, _ = ndimage.label(agree)
-    seeds = np.unique(comp[hull & agree])
-    grown = np.isin(comp, seeds[seeds > 0])
-    return grown | (grown[my, mx] & band)
-
-
-def symmetric_region(
-    pairs: MirrorPixelPairs, normals: torch.Tensor, offsets: torch.Tensor, h: int, w: int, lab: np.ndarray | None = None, min_corr: float = 1.0
-) -> np.ndarray:
-    """``(H, W)`` int64 axis index of the symmetric region of each axis (-1 outside): the
-    convex hull of the axis's pairs, grown (given ``lab (3, H, W)`` and ``min_corr < 1``)
-    through the pixels whose neighbourhood correlates with the mirror image's at least
-    ``min_corr``; with no pairs (axes given by the caller) the pixels whose mirror lies in
-    the image. The first axis wins where regions overlap."""
-    region = np.full((h, w), -1, dtype=np.int64)
-    ys, xs = np.mgrid[0:h, 0:w]
-    for a in reversed(range(normals.shape[0])):
-        if len(pairs):
-            pts = torch.cat([pairs.left[pairs.axis == a], pairs.right[pairs.axis == a]]).numpy()
-            if len(pts) < 3:
-                continue
-            hull = cv2.convexHull(pts.round().astype(np.int32))
-            m = np.zeros((h, w), np.uint8)
-            cv2.fillConvexPoly(m, hull, 1)
-            inside = m > 0
-            if min_corr < 1.0 and lab is not None:
-                inside = _grow(inside, lab, normals[a].numpy(), float(offsets[a]), min_corr)
-            region[inside] = a
-        else:
-            n, b = normals[a].numpy(), float(offsets[a])
-            d = xs * n[0] + ys * n[1] + b
-            mx, my = xs - 2 * d * n[0], ys - 2 * d * n[1]
-            inside = (mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1)
-            region[inside] = a
-    return region
 
 
 def slic_grid(h: int, w: int, step: int) -> torch.Tensor:
@@ -250,7 +194,7 @@ def symm_slic(
     timings["init"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     maps = MirrorMaps.build(normals, offsets, h, w)
-    labels = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters)
+    labels, _ = slic_iterations(lab, c, maps, step, settings.compactness, settings.max_iters, settings.tol_shift)
     timings["slic"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     active = ((c.partner < 0) | c.left).numpy()
