@@ -68,6 +68,7 @@ from torchsym.io import read_image
 from torchsym.metrics.masks import best_reflection_iou
 from torchsym.metrics.superpixels import segmentation_error
 from torchsym.metrics.symmetry_map import ssm_scores
+from torchsym.runner.evaluate import read_object_mask
 
 ROOT = Path(__file__).resolve().parents[1]
 LIST = ROOT / "benchmarks" / "data" / "symmetric_masks.txt"
@@ -81,12 +82,7 @@ def mask_paths(ritm: Path) -> list[tuple[str, str, Path]]:
     return out
 
 
-def read_mask(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """``(object, ignore)`` bool ``(H, W)``: GrabCut's 255 is the object and its 128 band is
-    unlabelled; Berkeley's masks are 0 / 255 (channel 0)."""
-    m = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    m = m[..., 0] if m.ndim == 3 else m
-    return m > 128, m == 128
+read_mask = read_object_mask  # (object, ignore): GrabCut's 128 band unlabelled; Berkeley's 0 / 255
 
 
 def rule(path: Path) -> dict:
