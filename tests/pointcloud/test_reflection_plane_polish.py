@@ -7,8 +7,7 @@ import torch
 from torchsym.geometry import plane_angle
 from torchsym.matching import KNNIndex
 from torchsym.pointcloud import planted_symmetric_cloud
-from torchsym.geometry import reflect_points
-from torchsym.pointcloud.reflection_plane.polish import exact_share, local_surface, pair_steps, surface_steps
+from torchsym.pointcloud.reflection_plane.polish import local_surface, pair_steps, surface_steps
 from torchsym.pointcloud.reflection_plane.settings import PolishSettings
 
 
@@ -58,23 +57,3 @@ class TestPairSteps:
         start = _tilted(normal, 0.05)
         n, b, _, _, steps = pair_steps(pts, KNNIndex(pts), start, offset, 0.0, 0.05, 8)
         assert torch.equal(n, start) and steps == 0
-
-    def test_without_exact_pairs(self):
-        """No step where too few points have an exact mirror, one where enough have."""
-        pts, normal, offset = _cloud()
-        start = _tilted(normal, 0.05)
-        g = torch.Generator().manual_seed(5)
-        # each point moved off its mirror's position: no exact pairs left
-        moved = pts + 0.01 * torch.randn(pts.shape, generator=g, dtype=pts.dtype)
-        n, _, dist, _, steps = pair_steps(moved, KNNIndex(moved), start, offset, float("inf"), 0.05, 8, exact=(1e-4, 0.1))
-        assert steps == 0 and torch.equal(n, start) and dist.shape == (pts.shape[0],)
-        n, _, _, _, steps = pair_steps(pts, KNNIndex(pts), start, offset, float("inf"), 0.05, 8, exact=(1e-2, 0.1))
-        assert steps >= 1 and float(plane_angle(n, normal)) < 1e-9
-
-
-class TestExactShare:
-    def test_value(self):
-        pts, normal, offset = _cloud(500)
-        dist, _ = KNNIndex(pts).query(reflect_points(pts, normal, offset))
-        assert exact_share(dist, 1e-9) == 1.0
-        assert exact_share(torch.tensor([0.0, 0.5, 1.0, 2.0]), 0.75) == 0.5

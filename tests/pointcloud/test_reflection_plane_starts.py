@@ -44,6 +44,22 @@ class TestSearchStarts:
         search = _search(1000, 5, 0.05, n_starts=3, starts={"accept": 1.0, "reference_floor": 1.0, "pca": False, "dominance": 100.0})
         assert search.stop == "exhausted" and calls == [search.tried]
 
+    def test_confirmed(self):
+        """With ``starts.confirm`` a start aligned onto the best plane so far ends the list."""
+        kw = {"n_starts": 40, "starts": {"accept": 1.0, "reference_floor": 1.0, "dominance": 100.0, "confirm": True}}
+        search = _search(1000, 5, 0.005, **kw)
+        assert search.stop == "confirmed" and search.tried < 43
+        off = _search(1000, 5, 0.005, **{**kw, "starts": {**kw["starts"], "confirm": False}})
+        assert off.stop == "exhausted" and off.tried > search.tried
+
+    def test_same_plane(self):
+        pts = torch.randn(200, 3, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+        n = torch.tensor([0.0, 0.0, 1.0], dtype=torch.float64)
+        b = torch.tensor(0.1, dtype=torch.float64)
+        assert starts.same_plane(pts, (n, b), (-n, -b), 1e-9)
+        assert starts.same_plane(pts, (n, b), (n, b + 0.004), 0.01)
+        assert not starts.same_plane(pts, (n, b), (n, b + 0.01), 0.01)
+
     @pytest.mark.parametrize("supports, expected", [([0.9, 0.3, 0.3, 0.3, 0.3, 0.3], True), ([0.9, 0.3], False)])
     def test_is_dominant(self, supports, expected):
         assert starts.is_dominant(supports, ReflectionPlaneSettings().starts) is expected

@@ -22,7 +22,7 @@ from torchsym.pointcloud.reflection_plane.prealign import neighbourhood_pca, poi
 from torchsym.pointcloud.reflection_plane.prepare import spacing
 from torchsym.pointcloud.reflection_plane.settings import PolishSettings, ReflectionPlaneSettings
 
-__all__ = ["Polished", "exact_share", "local_surface", "pair_steps", "polish", "surface_steps"]
+__all__ = ["Polished", "local_surface", "pair_steps", "polish", "surface_steps"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,36 +90,26 @@ def surface_steps(
     return normal, offset, it, converged, se
 
 
-def exact_share(dist: torch.Tensor, within: float) -> float:
-    """Share of the mirror residuals ``dist (N,)`` below ``within``: points whose mirror
-    image lands on another point of the cloud, as on a cloud mirror-completed point by point."""
-    return float((dist < within).double().mean())
-
-
 def pair_steps(
     points: torch.Tensor, index: KNNIndex, normal: torch.Tensor, offset: torch.Tensor, se: float,
-    max_residual: float, max_iters: int, *, exact: tuple[float, float] = (0.0, 0.0),
+    max_residual: float, max_iters: int,
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, int]:
     """Algorithm 6 steps on every point of ``points (N, 3)`` (``index`` over them; pairs as
     :func:`~torchsym.pointcloud.reflection_plane.alternation.kept_pairs`), each taken only
     when its pairs' fit has a smaller standard error than the plane it replaces (``se``,
     radians, for the first), until a step moves the normal by less than its own standard
-    error, or after ``max_iters`` steps. None is taken unless at least ``exact[1]`` of the
-    points have a mirror residual below ``exact[0]`` (:func:`exact_share`).
+    error, or after ``max_iters`` steps.
 
     Where the cloud holds exact mirror pairs, their fit tightens step by step to the exact
     plane, which steps to a local surface (an average of neighbours) do not reach; on a
-    surface without them the nearest points' residuals are about half a spacing and biased
-    low (the nearest of several noisy points), so their fit's standard error understates
-    its error, and no step is taken.
+    surface without them the first fit is no tighter than the steps before, or moves less
+    than its error.
 
     Returns ``(normal (3,), offset (), residuals (N,), nearest (N,), steps taken)``: the
     whole cloud's residuals at the plane before the last step taken when that step moved
     less than its error, else at the returned plane.
     """
     dist, nn_idx = index.query(reflect_points(points, normal, offset))
-    if exact_share(dist, exact[0]) < exact[1]:
-        return normal, offset, dist, nn_idx, 0
     for it in range(max_iters):
         keep = kept_pairs(points, dist, nn_idx, max_residual)
         if int(keep.sum()) <= points.shape[1] + 1:
@@ -151,8 +141,7 @@ def polish(
     """Refine ``(normal, offset)`` on ``xs (N, 3)`` (``index`` over it): Algorithm 6 on every
     point when ``whole`` (the starts were refined on the whole cloud), pairs trimmed at the
     inlier tolerance; else :func:`surface_steps` from ``polish.n_queries`` random points,
-    then :func:`pair_steps` where exact mirror pairs are at least ``kernel.max_exact_share``
-    of the points (residual below ``kernel.exact_factor`` x the inlier tolerance). Then measure every point's mirror residual at the plane (on a
+    then :func:`pair_steps`. Then measure every point's mirror residual at the plane (on a
     larger cloud, possibly at the plane before the last step, which moved it by less than
     its standard error)."""
     iterations, converged = 0, False
@@ -170,10 +159,8 @@ def polish(
         queries = xs[random_subset(xs.shape[0], settings.polish.n_queries, generator)]
         normal, offset, iterations, converged, se = surface_steps(queries, xs, index, normal, offset, settings.polish)
         full_spacing = spacing(xs, index, generator, q=(settings.spacing_quantile, 0.5))
-        exact = (settings.kernel.exact_factor * settings.inlier_factor * full_spacing[1], settings.kernel.max_exact_share)
         normal, offset, dist, nn_idx, steps = pair_steps(
-            xs, index, normal, offset, se, settings.inlier_factor * full_spacing[0], settings.polish.max_iters,
-            exact=exact,
+            xs, index, normal, offset, se, settings.inlier_factor * full_spacing[0], settings.polish.max_iters
         )
         final, full_spacing, iterations = (dist, nn_idx), full_spacing[1], iterations + steps
     if final is None:

@@ -51,7 +51,7 @@ class StartsSettings(Settings):
     dominance_gap: float = setting(0.05, "... and this far above it", low=0.0)
     dominance_after: int = setting(6, "... of at least this many starts tried", low=1)
     confirm: bool = setting(
-        True, "stop once a start aligns onto the best plane found from an earlier start (mirror images within the inlier tolerance)"
+        False, "stop once a start aligns onto the best plane found from an earlier start (mirror images within the inlier tolerance)"
     )
 
 
@@ -108,13 +108,8 @@ class KernelSettings(Settings):
     """Kernel-correlation refinement for perturbed clouds (an extension)."""
 
     enabled: bool = setting(True, "run the stage when the cloud has no exact mirror pairs and is thick")
-    exact_factor: float = setting(
-        0.05, "a mirror is exact within this (here and for the polish's pair steps)", unit="x inlier tolerance", low=0.0
-    )
-    max_exact_share: float = setting(
-        0.1, "run only when fewer points than this have an exact mirror (the polish's pair steps: only when as many or more)",
-        low=0.0, high=1.0,
-    )
+    exact_factor: float = setting(0.05, "a mirror is exact within this", unit="x inlier tolerance", low=0.0)
+    max_exact_share: float = setting(0.1, "run only when fewer points than this have an exact mirror", low=0.0, high=1.0)
     min_variation: float = setting(0.1, "... and the surface variation is above this", low=0.0)
     width_factor: float = setting(2.0, "kernel width", unit="x median residual", low=0.0, low_open=True)
     n_starts: int = setting(8, "best-supported starts refined besides the polished plane and the axes", low=0)
