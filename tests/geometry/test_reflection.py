@@ -15,6 +15,7 @@ from torchsym.geometry import (
     point_plane_distance,
     reflect_points,
     reflection_matrix,
+    reflection_fit,
     reflection_matrix_from_angles,
     reflection_transform,
     spread_normals,
@@ -225,3 +226,30 @@ class TestPairFitErrors:
         rms = math.sqrt(sum(a * a for a in angles) / len(angles))  # two directions of error
         se = sum(ses) / len(ses)
         assert 0.8 * math.sqrt(2.0) * se < rms < 1.25 * math.sqrt(2.0) * se
+
+
+class TestReflectionFit:
+    def test_value(self):
+        """One decomposition gives what plane_from_pairs and pair_fit_errors give apart."""
+        g = torch.Generator().manual_seed(2)
+        p = torch.randn(300, 3, generator=g, dtype=torch.float64)
+        q = reflect_points(p, torch.tensor([0.0, 0.6, 0.8], dtype=torch.float64), 0.2)
+        q = q + 0.01 * torch.randn(q.shape, generator=g, dtype=torch.float64)
+        w = torch.rand(300, generator=g, dtype=torch.float64)
+        n, b, se_n, se_b = reflection_fit(p, q, w)
+        n_ref, b_ref = plane_from_pairs(p, q, w)
+        se_ref = pair_fit_errors(p, q, w)
+        assert torch.allclose(n, n_ref, atol=1e-12) and torch.allclose(b, b_ref, atol=1e-12)
+        assert torch.allclose(se_n, se_ref[0], rtol=1e-9) and torch.allclose(se_b, se_ref[1], rtol=1e-9)
+
+    def test_batched(self):
+        p, q = _rand(2, 50, 3), _rand(2, 50, 3, seed=1)
+        n, b, se_n, se_b = reflection_fit(p, q)
+        assert n.shape == (2, 3) and b.shape == (2,) and se_n.shape == (2,) and se_b.shape == (2,)
+        assert torch.allclose(n[1], reflection_fit(p[1], q[1])[0], atol=1e-12)
+
+    def test_exception(self):
+        with pytest.raises(InputShapeError, match="mirrors"):
+            reflection_fit(_rand(5, 3), _rand(4, 3))
+        with pytest.raises(InputShapeError, match="weights"):
+            reflection_fit(_rand(5, 3), _rand(5, 3), torch.ones(4, dtype=torch.float64))

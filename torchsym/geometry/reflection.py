@@ -26,6 +26,7 @@ __all__ = [
     "plane_distance",
     "pair_fit_errors",
     "plane_from_pairs",
+    "reflection_fit",
     "plane_from_reflection",
     "point_plane_distance",
     "reflect_points",
@@ -184,22 +185,10 @@ def plane_from_pairs(
         >>> n, b = plane_from_pairs(p, q); n.round(decimals=4), b.abs().round(decimals=4)
         (tensor([1., 0.]), tensor(0.))
     """
-    if not isinstance(points, torch.Tensor) or not isinstance(mirrors, torch.Tensor):
-        raise InputShapeError(
-            f"points, mirrors: expected (..., N, D) tensors, got {type(points).__name__} and {type(mirrors).__name__}"
-        )
-    if points.shape != mirrors.shape or points.dim() < 2:
-        raise InputShapeError(
-            f"mirrors: expected the same (..., N, D) shape as points {tuple(points.shape)}, got {tuple(mirrors.shape)}"
-        )
     if constraint not in ("normal", "plane"):
         raise InputValueError(f"constraint: expected 'normal' or 'plane', got {constraint!r}")
+    w = _pair_weights(points, mirrors, weights)
     d = points.shape[-1]
-    if weights is None:
-        weights = torch.ones(points.shape[:-1], dtype=points.dtype, device=points.device)
-    elif weights.shape != points.shape[:-1]:
-        raise InputShapeError(f"weights: expected {tuple(points.shape[:-1])}, got {tuple(weights.shape)}")
-    w = weights.to(points.dtype)
     mid = 0.5 * (points + mirrors)  # (..., N, D)
     if constraint == "normal":
         mat, mean_m = _normal_form(points, mirrors, w, lam)
@@ -222,6 +211,24 @@ def plane_from_pairs(
         norm = n.norm(dim=-1).clamp_min(torch.finfo(points.dtype).tiny)
         n, b = n / norm.unsqueeze(-1), b / norm
     return canonical_sign(n, b)
+
+
+def _pair_weights(points, mirrors, weights: torch.Tensor | None) -> torch.Tensor:
+    """Check the pairs ``points, mirrors (..., N, D)`` and return their weights ``(..., N)``
+    in the points' dtype (1 when ``weights`` is None)."""
+    if not isinstance(points, torch.Tensor) or not isinstance(mirrors, torch.Tensor):
+        raise InputShapeError(
+            f"points, mirrors: expected (..., N, D) tensors, got {type(points).__name__} and {type(mirrors).__name__}"
+        )
+    if points.shape != mirrors.shape or points.dim() < 2:
+        raise InputShapeError(
+            f"mirrors: expected the same (..., N, D) shape as points {tuple(points.shape)}, got {tuple(mirrors.shape)}"
+        )
+    if weights is None:
+        return torch.ones(points.shape[:-1], dtype=points.dtype, device=points.device)
+    if weights.shape != points.shape[:-1]:
+        raise InputShapeError(f"weights: expected {tuple(points.shape[:-1])}, got {tuple(weights.shape)}")
+    return weights.to(points.dtype)
 
 
 def _normal_form(points: torch.Tensor, mirrors: torch.Tensor, w: torch.Tensor, lam: float):
@@ -257,11 +264,36 @@ def pair_fit_errors(
     Returns:
         ``angle (...)`` in radians and ``offset (...)`` in the points' units.
     """
-    w = torch.ones(points.shape[:-1], dtype=points.dtype, device=points.device) if weights is None else weights.to(points.dtype)
-    d = points.shape[-1]
+    w = _pair_weights(points, mirrors, weights)
     mat, _ = _normal_form(points, mirrors, w, 0.25)
-    lams = torch.linalg.eigvalsh(mat)  # (..., D) ascending
-    tiny = torch.finfo(points.dtype).tiny
+    return _fit_errors(torch.linalg.eigvalsh(mat), w)
+
+
+def reflection_fit(
+    points: torch.Tensor, mirrors: torch.Tensor, weights: torch.Tensor | None = None
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The least-squares reflection of the pairs ``points, mirrors (..., N, D)`` (weights
+    ``(..., N)``) and its standard errors, from one eigendecomposition of the fit's matrix:
+    :func:`plane_from_pairs` (``constraint="normal"``, ``lam=1/4``) and
+    :func:`pair_fit_errors` together.
+
+    Returns:
+        ``normal (..., D)`` (largest component positive), ``offset (...)``, the normal's
+        standard error ``(...)`` in radians and the offset's ``(...)`` in the points' units.
+    """
+    w = _pair_weights(points, mirrors, weights)
+    mat, mean_m = _normal_form(points, mirrors, w, 0.25)
+    lams, vecs = torch.linalg.eigh(mat)
+    n = vecs[..., :, 0]
+    normal, offset = canonical_sign(n, -(n * mean_m).sum(-1))
+    return (normal, offset, *_fit_errors(lams, w))
+
+
+def _fit_errors(lams: torch.Tensor, w: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Standard errors of the normal and the offset (:func:`pair_fit_errors`) from the
+    ascending eigenvalues ``(..., D)`` of the fit's matrix and the weights ``(..., N)``."""
+    d = lams.shape[-1]
+    tiny = torch.finfo(lams.dtype).tiny
     wsum = w.sum(-1).clamp_min(tiny)
     m_eff = wsum**2 / (w * w).sum(-1).clamp_min(tiny)
     var = lams[..., 0].clamp_min(0) / (d * m_eff - d).clamp_min(1.0) * (wsum / m_eff)  # per coordinate and unit weight

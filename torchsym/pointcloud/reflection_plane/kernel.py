@@ -12,7 +12,7 @@ import math
 
 import torch
 
-from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, reflect_points, spread_normals
+from torchsym.geometry.reflection import plane_angle, reflect_points, reflection_fit, spread_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.geometry.sampling import sphere_normals
 from torchsym.optim.convergence import remaining_factor
@@ -71,14 +71,14 @@ def kernel_refine(
         steps += 1
         src = points.repeat_interleave(k, dim=0)  # (N k, 3) each point k times
         dst, w = index.points[j.reshape(-1)].to(points.dtype), w.to(points.dtype)
-        new_n, new_b = plane_from_pairs(src, dst, w)
+        new_n, new_b, se, _ = reflection_fit(src, dst, w)
         if float(new_n @ normal) < 0:
             new_n, new_b = -new_n, -new_b
         moved = math.degrees(float(plane_angle(new_n, normal)))
         step = new_n - normal
         ahead = remaining_factor(step, prev_step) if tol_se > 0 else 1.0
         normal, offset, prev_step = new_n, new_b, step
-        tol = max(tol_angle, tol_se * math.degrees(float(pair_fit_errors(src, dst, w)[0]))) if tol_se > 0 else tol_angle
+        tol = max(tol_angle, tol_se * math.degrees(float(se)))
         if moved * ahead < tol:
             break
     return normal, offset, steps

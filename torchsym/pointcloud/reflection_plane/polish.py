@@ -15,14 +15,14 @@ import dataclasses
 import torch
 
 from torchsym.core.random import random_subset
-from torchsym.geometry.reflection import pair_fit_errors, plane_angle, plane_from_pairs, reflect_points
+from torchsym.geometry.reflection import plane_angle, reflect_points, reflection_fit
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.alternation import alternate, kept_pairs
-from torchsym.pointcloud.reflection_plane.prealign import point_to_plane_step
+from torchsym.pointcloud.reflection_plane.prealign import neighbourhood_pca, point_to_plane_step
 from torchsym.pointcloud.reflection_plane.prepare import spacing
 from torchsym.pointcloud.reflection_plane.settings import PolishSettings, ReflectionPlaneSettings
 
-__all__ = ["Polished", "pair_steps", "local_surface", "polish", "surface_steps"]
+__all__ = ["Polished", "local_surface", "pair_steps", "polish", "surface_steps"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,11 +54,8 @@ def local_surface(points: torch.Tensor, index: KNNIndex, at: torch.Tensor, k: in
     The centroid of a neighbourhood, unlike the nearest point, is hardly drawn towards the
     query by the noise across the surface.
     """
-    _, j = index.query(at, k=min(k, points.shape[0]))
-    nb = points[j]  # (M, k, 3)
-    centroid = nb.mean(1)
-    nb = nb - centroid[:, None, :]
-    return centroid, torch.linalg.eigh(nb.transpose(1, 2) @ nb)[1][:, :, 0]
+    centroid, _, vecs = neighbourhood_pca(points, index, at, k)
+    return centroid, vecs[:, :, 0]
 
 
 def surface_steps(
@@ -117,11 +114,10 @@ def pair_steps(
         keep = kept_pairs(points, dist, nn_idx, max_residual)
         if int(keep.sum()) <= points.shape[1] + 1:
             return normal, offset, dist, nn_idx, it
-        p, q = points[keep], points[nn_idx[keep]]
-        se_pairs = float(pair_fit_errors(p, q)[0])
+        n_new, b_new, se_pairs, _ = reflection_fit(points[keep], points[nn_idx[keep]])
+        se_pairs = float(se_pairs)
         if se_pairs >= se:
             return normal, offset, dist, nn_idx, it
-        n_new, b_new = plane_from_pairs(p, q)
         if float((n_new * normal).sum()) < 0:
             n_new, b_new = -n_new, -b_new
         moved = float(plane_angle(n_new, normal))

@@ -14,16 +14,27 @@ from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_ba
 from torchsym.matching.knn import KNNIndex
 from torchsym.optim.convergence import remaining_factor
 
-__all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
+__all__ = ["local_pca", "neighbourhood_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
+
+
+def neighbourhood_pca(
+    points: torch.Tensor, index: KNNIndex, at: torch.Tensor, k: int = 10
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The ``k`` nearest points of ``points (N, 3)`` (``index`` over them) to each of
+    ``at (M, 3)``: their centroid ``(M, 3)``, and the eigenvalues ``(M, 3)`` (ascending)
+    and eigenvectors ``(M, 3, 3)`` (columns) of their scatter matrix."""
+    _, j = index.query(at, k=min(k, points.shape[0]))
+    nb = points[j]  # (M, k, 3)
+    centroid = nb.mean(1)
+    nb = nb - centroid[:, None, :]
+    lam, vecs = torch.linalg.eigh(nb.transpose(1, 2) @ nb)
+    return centroid, lam, vecs
 
 
 def local_pca(points: torch.Tensor, index: KNNIndex, k: int = 10) -> tuple[torch.Tensor, torch.Tensor]:
     """Eigenvalues ``(N, 3)`` (ascending) and eigenvectors ``(N, 3, 3)`` (columns) of the
     scatter matrix of each point's ``k`` nearest neighbours."""
-    _, j = index.query(points, k=min(k, points.shape[0]))
-    nb = points[j]  # (N, k, 3)
-    nb = nb - nb.mean(1, keepdim=True)
-    return torch.linalg.eigh(nb.transpose(1, 2) @ nb)
+    return neighbourhood_pca(points, index, points, k)[1:]
 
 
 def point_normals(points: torch.Tensor, index: KNNIndex, k: int = 10) -> torch.Tensor:
@@ -43,21 +54,23 @@ def point_to_plane_step(x, q, nu, normal, offset, robust: bool):
     dtype = x.dtype
     basis = tangent_basis(normal)  # (3, 2)
     signed = x @ normal + offset  # (N,)
-    r = ((x - 2.0 * signed[:, None] * normal - q) * nu).sum(1)  # (N,)
-    nun = nu @ normal
+    nun = nu @ normal  # (N,)
+    r = ((x - q) * nu).sum(1) - 2.0 * signed * nun  # (N,) = nu . (reflect(x) - q)
     jac = -2.0 * torch.cat([nun[:, None] * (x @ basis) + signed[:, None] * (nu @ basis), nun[:, None]], 1)  # (N, 3)
     if robust:
         s = 2.5 * r.abs().median().clamp_min(torch.finfo(dtype).eps)
         w = 1.0 / (1.0 + (r / s) ** 2)
     else:
         w = torch.ones_like(r)
-    a = (jac * w[:, None]).T @ jac
-    g = (jac * w[:, None]).T @ r
-    step = -torch.linalg.lstsq(a + 1e-12 * torch.eye(3, dtype=dtype, device=x.device), g[:, None]).solution[:, 0]
+    jw = jac * w[:, None]
+    cov = torch.linalg.pinv(jw.T @ jac + 1e-12 * torch.eye(3, dtype=dtype, device=x.device))  # (3, 3)
+    step = -(cov @ (jw.T @ r))  # (3,)
     m = normal + basis @ step[:2]
     norm = m.norm()
-    var = float((w * r * r).sum() / (w.sum() - 3).clamp_min(1.0))
-    se = math.sqrt(var * float(torch.linalg.eigvalsh(torch.linalg.pinv(a)[:2, :2])[-1].clamp_min(0)))
+    # the largest eigenvalue of the normal's 2 x 2 covariance block, and s^2, from one transfer
+    c00, c01, c11, energy, wsum = torch.stack([cov[0, 0], cov[0, 1], cov[1, 1], (w * r * r).sum(), w.sum()]).tolist()
+    top = 0.5 * (c00 + c11) + math.sqrt(0.25 * (c00 - c11) ** 2 + c01 * c01)
+    se = math.sqrt(energy / max(wsum - 3.0, 1.0) * max(top, 0.0))
     return m / norm, (offset + step[2]) / norm, se
 
 
@@ -87,8 +100,14 @@ def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, to
     return normal, offset, it
 
 
+#: residuals beyond this many kernel widths add less than exp(-18) to a support: not searched for
+SUPPORT_REACH = 6.0
+
+
 def support(points, index, normal, offset, sigma: float) -> tuple[float, float]:
     """Soft share of ``points (N, 3)`` whose mirror image lands near the set (mean of
-    ``exp(-d^2 / 2 sigma^2)`` over residuals ``d``), and the median residual."""
-    d, _ = index.query(reflect_points(points, normal, offset))
+    ``exp(-d^2 / 2 sigma^2)`` over residuals ``d``), and the median residual (inf when
+    more than half lie beyond ``SUPPORT_REACH`` sigma, which are not searched for: far
+    queries are the slow ones)."""
+    d, _ = index.query(reflect_points(points, normal, offset), max_distance=SUPPORT_REACH * sigma)
     return float(torch.exp(-0.5 * (d / sigma) ** 2).mean()), float(d.median())

@@ -50,6 +50,9 @@ class StartsSettings(Settings):
     dominance: float = setting(1.5, "stop once the best support is this many times the median support", low=0.0)
     dominance_gap: float = setting(0.05, "... and this far above it", low=0.0)
     dominance_after: int = setting(6, "... of at least this many starts tried", low=1)
+    confirm: bool = setting(
+        False, "stop once a start aligns onto the best plane found from an earlier start (mirror images within the inlier tolerance)"
+    )
 
 
 @dataclasses.dataclass(frozen=True)

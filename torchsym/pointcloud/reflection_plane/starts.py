@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from torchsym.core.random import random_subset
-from torchsym.geometry.reflection import spread_normals
+from torchsym.geometry.reflection import reflect_points, spread_normals
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.alternation import alternate
 from torchsym.pointcloud.reflection_plane.candidates import initial_normals, score_normals
@@ -29,6 +29,7 @@ __all__ = [
     "is_dominant",
     "principal_axes",
     "refine_context",
+    "same_plane",
     "search_starts",
 ]
 
@@ -49,6 +50,13 @@ def candidate_starts(sample: torch.Tensor, index: KNNIndex, spacing: float, sett
     cand, b_cand, order = initial_normals(sample, index, settings.init, spacing)
     chosen = spread_normals(cand, order, settings.n_starts, settings.starts.min_separation)
     return [(cand[k], b_cand[k]) for k in chosen]
+
+
+def same_plane(points: torch.Tensor, a: Plane, b: Plane, tol: float) -> bool:
+    """True when the mirror images of ``points (Q, 3)`` about planes ``a`` and ``b`` lie
+    within ``tol`` of each other at the median: for the support's kernel the two are
+    one plane."""
+    return float((reflect_points(points, *a) - reflect_points(points, *b)).norm(dim=1).median()) < tol
 
 
 def is_dominant(supports: list[float], settings: StartsSettings) -> bool:
@@ -117,11 +125,15 @@ class StartSearch:
         iterations: alignment steps of the best start.
         tried: starts refined.
         aligned: ``(support, normal, offset, steps)`` of every start refined.
+        stop: why the list of starts ended: ``"accepted"`` (a start reached the acceptance
+            level), ``"dominant"`` (one start clearly above the others), ``"confirmed"`` (a
+            start aligned onto the best plane found from an earlier one) or ``"exhausted"``.
     """
 
     best: tuple[torch.Tensor, torch.Tensor, float, float] | None = None
     iterations: int = 0
     tried: int = 0
+    stop: str = "exhausted"
     aligned: list[tuple[float, torch.Tensor, torch.Tensor, int]] = dataclasses.field(default_factory=list)
 
     def ranked(self, count: int) -> list[Plane]:
@@ -148,15 +160,27 @@ def _align(nk, bk, ctx: RefineContext, settings: ReflectionPlaneSettings):
 
 
 def _try_starts(starts: list[Plane], search: StartSearch, ctx: RefineContext, settings: ReflectionPlaneSettings) -> bool:
-    """Refine ``starts`` in order into ``search``; True once one is accepted or dominates."""
+    """Refine ``starts`` in order into ``search``; True once one is accepted or dominates,
+    or (``starts.confirm``) once a start aligns onto the best plane so far
+    (:func:`same_plane` at the inlier tolerance)."""
     for nk, bk in starts:
         nk, bk, frac, med, steps = _align(nk, bk, ctx, settings)
         search.aligned.append((frac, nk, bk, steps))
+        confirmed = settings.starts.confirm and search.best is not None and same_plane(
+            ctx.queries, (nk, bk), search.best[:2], ctx.tol
+        )
         if search.best is None or (frac, -med) > (search.best[2], -search.best[3]):
             search.best = (nk, bk, frac, med)
             search.iterations = steps
         search.tried += 1
-        if frac >= settings.starts.accept * ctx.reference or is_dominant([a[0] for a in search.aligned], settings.starts):
+        if frac >= settings.starts.accept * ctx.reference:
+            search.stop = "accepted"
+            return True
+        if is_dominant([a[0] for a in search.aligned], settings.starts):
+            search.stop = "dominant"
+            return True
+        if confirmed:
+            search.stop = "confirmed"
             return True
     return False
 
@@ -189,10 +213,11 @@ def search_starts(
     axes: list[Plane], subs: Subsample, ctx: RefineContext, settings: ReflectionPlaneSettings
 ) -> StartSearch:
     """Refine the principal ``axes``, then (when none is accepted) Algorithm 5's candidates;
-    when no start was accepted after pre-alignment, run the Algorithm 6 fallback."""
+    when the pre-aligned starts left the choice open (none accepted, none dominant), run
+    the Algorithm 6 fallback."""
     search = StartSearch()
     if not _try_starts(axes, search, ctx, settings):
         _try_starts(candidate_starts(subs.sample, subs.index, subs.spacing, settings), search, ctx, settings)
-    if settings.prealign.enabled and search.best[2] < settings.starts.accept * ctx.reference:
+    if settings.prealign.enabled and search.stop == "exhausted":
         _fallback(search, ctx, settings)
     return search
