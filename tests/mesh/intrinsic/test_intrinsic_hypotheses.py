@@ -76,9 +76,28 @@ class TestExtrinsicHypothesis:
         assert strict.hypothesis != "extrinsic"
 
     @staticmethod
-    def _bumpy(mesh: Mesh) -> Mesh:
-        """The blob with a bump that breaks its intrinsic symmetry a little: the thesis's map has large finite defects."""
-        return Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), mesh.faces)
+    def _bumpy(mesh: Mesh, hole: bool = True) -> Mesh:
+        """The blob with a bump that breaks its intrinsic symmetry a little: the thesis's map has large finite defects.
+        With ``hole``, one triangle is taken out (step 1 covers it again: the same surface, but a mesh with a hole)."""
+        faces = mesh.faces[1:] if hole else mesh.faces
+        return Mesh(mesh.vertices * (1 + 0.05 * torch.sin(3 * mesh.vertices[:, :1] + 2 * mesh.vertices[:, 1:2])), faces)
+
+    def test_not_tried_on_a_closed_mesh(self, solved):
+        # the same weak map on the closed bumpy blob: no holes, so the plane is not tried
+        _, mesh, _ = solved
+        out = intrinsic_symmetry(self._bumpy(mesh, hole=False))
+        assert out.holes_closed == 0 and out.hypothesis != "extrinsic" and "extrinsic" not in out.timings
+
+    def test_coarse_copy_follows_the_input(self, solved, blob, settings_spy):
+        from torchsym.mesh.synthetic import punch_holes
+
+        # a closed input solved on its coarse copy (which may have small holes of its own): step 10 is off there
+        _, mesh, gt = solved
+        intrinsic_symmetry(self._bumpy(mesh, hole=False), coarse={"max_vertices": 500, "n_vertices": 400})
+        assert settings_spy["settings"].extrinsic.enabled is False
+        holed, _ = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
+        intrinsic_symmetry(holed, coarse={"max_vertices": 500, "n_vertices": 400})
+        assert settings_spy["settings"].extrinsic.enabled is True
 
     def test_tried_when_the_chosen_map_has_a_large_defect(self, solved, monkeypatch):
         from torchsym.mesh.intrinsic import select

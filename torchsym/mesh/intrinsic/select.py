@@ -1,5 +1,5 @@
 """Steps 9-10: choose a hypothesis on the vertex sample by tests of an isometric involution,
-and try the vertices' mirror plane when the chosen map is weak (extensions)."""
+and try the vertices' mirror plane when the chosen map is weak on a mesh with holes (extensions)."""
 
 from __future__ import annotations
 
@@ -99,7 +99,7 @@ def try_extrinsic(
     ws: Workspace, candidates: list[Candidate], table: np.ndarray, best: int, seen: list[np.ndarray],
     patch_share: float, gen: torch.Generator, notes: list[str],
 ) -> tuple[np.ndarray, int, str | None]:
-    """Step 10: the mirror plane's map (:func:`~torchsym.mesh.intrinsic.hypotheses.extrinsic_candidate`),
+    """Step 10 (run on meshes with holes): the mirror plane's map (:func:`~torchsym.mesh.intrinsic.hypotheses.extrinsic_candidate`),
     refined and tested as in step 9, replaces the weak chosen map when it passes the tests and
     the plane scores at least ``extrinsic.min_score`` (times one less ``patch_share``) or each
     test is at most :data:`EXTRINSIC_CLEARLY` times the weak map's. Appends to ``candidates``.

@@ -74,9 +74,9 @@ class Hypotheses(Settings):
 
 @dataclasses.dataclass(frozen=True)
 class Extrinsic(Settings):
-    """The vertices' mirror plane as a hypothesis when the intrinsic ones are weak (step 10, an extension)."""
+    """The vertices' mirror plane as a hypothesis when the intrinsic ones are weak on a mesh with holes (step 10, an extension)."""
 
-    enabled: bool = setting(True, "try the plane's map when the chosen intrinsic map is weak")
+    enabled: bool = setting(True, "try the plane's map when the chosen intrinsic map is weak and the mesh has holes")
     min_score: float = setting(
         0.3, "least calibrated score of the plane (asymmetric clouds stay below 0.3) for its map to be used", low=0.0, high=1.0
     )

@@ -40,6 +40,7 @@ from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
 from torchsym.mesh.intrinsic.workspace import Plan, Surface, Workspace, plan_bases, prepare_surface, sample_notes
 from torchsym.mesh.nearest import SampledSearch
+from torchsym.mesh.operators import edge_face_counts
 from torchsym.mesh.validate import validate_mesh
 
 __all__ = ["IntrinsicSymmetry", "intrinsic_symmetry"]
@@ -67,7 +68,7 @@ def intrinsic_symmetry(
     7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
     8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
     9. Choice of a hypothesis by ZoomOut and tests of an isometric involution on a vertex sample.
-    10. The vertices' mirror plane when the chosen map is weak (``extrinsic``).
+    10. The vertices' mirror plane when the chosen map is weak and the mesh has holes (``extrinsic``).
     11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
     12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
     13. ZoomOut on to ``polish.n_eigen`` eigenfunctions (``polish``).
@@ -125,7 +126,8 @@ def intrinsic_symmetry(
     table, best = choose(ws, candidates, images, seen)  # step 9
     timings["select"] += time.perf_counter() - tic
     extrinsic_note = None
-    if settings.extrinsic.enabled and is_weak(table[best]):
+    holed = surface.holes_closed > 0 or spectrum.has_boundary
+    if settings.extrinsic.enabled and holed and is_weak(table[best]):
         tic = time.perf_counter()
         table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
         timings["extrinsic"] = time.perf_counter() - tic
@@ -158,10 +160,16 @@ def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.G
     t_start = time.perf_counter()
     checked = validate_mesh(mesh, components=settings.components, min_vertices=settings.n_eigen + 1)
     v = checked.mesh.vertices.detach().cpu().double().numpy()  # (V', 3)
-    copy = coarse_copy(v, checked.mesh.faces.detach().cpu().numpy(), settings.coarse.n_vertices, np.random.default_rng(draw_seed(gen)))
+    f = checked.mesh.faces.detach().cpu().numpy()  # (F', 3)
+    copy = coarse_copy(v, f, settings.coarse.n_vertices, np.random.default_rng(draw_seed(gen)))
+    # the copy's own small holes (where regions meet irregularly) are no holes of the input: step 10 follows the input
+    holed = bool((edge_face_counts(f)[1] == 1).any())
     inner = intrinsic_symmetry(
         Mesh(torch.from_numpy(copy.vertices), torch.from_numpy(copy.faces)),
-        dataclasses.replace(settings, coarse=dataclasses.replace(settings.coarse, enabled=False)),
+        dataclasses.replace(
+            settings, coarse=dataclasses.replace(settings.coarse, enabled=False),
+            extrinsic=dataclasses.replace(settings.extrinsic, enabled=settings.extrinsic.enabled and holed),
+        ),
         generator=gen,
     )
     tic = time.perf_counter()
