@@ -284,8 +284,8 @@ def _markdown(res: dict[str, Any]) -> str:
         "# Dataset runner: serial, 2-worker LocalCluster, separate scheduler + 2 workers",
         "",
         f"Command: `python benchmarks/bench_runner.py --clouds {a['clouds']} --points {a['points']}`; "
-        f"{res['machine']}; torch {res['torch']}, dask {res['dask']}. The machine was shared with other "
-        "sessions while this ran: the timings are noisy, and the speed-ups lower than on an idle machine.",
+        f"{res['machine']}; torch {res['torch']}, dask {res['dask']}; load average {res.get('load', '?')} (1 min) at the "
+        "end of the run: on a machine shared with other jobs the speed-ups are lower than on an idle one.",
         "",
         "`items/s` leaves out the engine's start-up (cluster up, workers importing torch) and shut-down, "
         "`with start-up` includes them. `overhead ms` is wall x workers / n minus the mean task "
@@ -372,7 +372,7 @@ def main() -> None:
     if args.photos and (photos / "axes.txt").is_file():
         evaluations.append(evaluate_row("photos", work / "photos_serial.jsonl", photos / "axes.txt"))
     res = {
-        "args": vars(args), "machine": f"{os.cpu_count()} cores", "torch": torch.__version__, "dask": dask.__version__,
+        "args": vars(args), "machine": f"{os.cpu_count()} cores", "load": f"{os.getloadavg()[0]:.1f}", "torch": torch.__version__, "dask": dask.__version__,
         "runs": runs, "killed_worker": kw, "killed_driver": kd, "evaluations": evaluations,
     }
     out = Path(args.out)
