@@ -32,6 +32,7 @@ from torchsym.errors import InputValueError
 class ProbeSettings(Settings):
     marker_dir: str = setting("", "folder for the crash markers and the counter")
     sleep: float = setting(0.0, "seconds to sleep per input", unit="s", low=0.0)
+    delay: float = setting(0.0, "seconds to wait before anything, crashes included", unit="s", low=0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,6 +58,8 @@ class ProbeSolver(Solver):
 
     def forward(self, data, generator=None):
         s = self.settings
+        if s.delay:
+            time.sleep(s.delay)
         x0 = float(data[0, 0])
         die_after = int(os.environ.get("RUNNER_PROBE_DIE_AFTER", "0"))
         if die_after and _count(s.marker_dir) == die_after:

@@ -29,7 +29,11 @@ class TestLocalCluster:
         for i, x0 in enumerate([None, 777, 666, 555, None]):
             write_cloud(folder / f"c{i}.xyz", i, x0)
         out = tmp_path / "r.jsonl"
-        summary = run(probe_config(markers), str(folder), out, engine="local", workers=2, retries=1, imports=[PROBE])
+        # every input waits 0.5 s first: a result is gathered before another input kills its
+        # worker (a finished result lost with its worker is recomputed elsewhere and can be
+        # taken for the task that was running there, which then runs again uncounted)
+        cfg = probe_config(markers, delay=0.5)
+        summary = run(cfg, str(folder), out, engine="local", workers=2, retries=1, imports=[PROBE])
         assert (summary.engine, summary.n_ok, summary.n_error, summary.n_crashed) == ("local", 3, 1, 1)
         rec = _by_name(out)
         assert rec["c0.xyz"]["status"] == rec["c4.xyz"]["status"] == "ok"
@@ -38,7 +42,7 @@ class TestLocalCluster:
         assert rec["c2.xyz"]["error"]["type"] == "KilledWorker" and rec["c2.xyz"]["result"] is None
         assert rec["c3.xyz"]["status"] == "error" and rec["c3.xyz"]["attempts"] == 1  # never retried
         # resuming runs the crashed input again, nothing else (the auto engine: serial, one input left)
-        assert run(probe_config(markers), str(folder), out, imports=[PROBE], engine="local").n_skipped == 4
+        assert run(cfg, str(folder), out, imports=[PROBE], engine="local").n_skipped == 4
 
     def test_batches_split_when_their_worker_dies(self, tmp_path, markers, caplog):
         # quick inputs share tasks once the first ones are timed; the input that kills its
