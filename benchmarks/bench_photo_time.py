@@ -13,13 +13,13 @@ Usage: python benchmarks/bench_photo_time.py [--data DIR] [--threads 1]
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import time
 from pathlib import Path
 
 import torch
+from report import write_report
 
 import torchsym
 from torchsym.io import read_image
@@ -93,12 +93,7 @@ def main(argv=None) -> int:
         r = rows[-1]
         lines.append(f"| {entry} | {r['n']} | {r['median_wall']:.3f} | {r['max_wall']:.3f} | {r['median_cpu']:.3f} | "
                      f"{r['max_cpu']:.3f} | {r['over_1s']} | {slowest} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "photo_time.md").write_text(text)
-    (out / "photo_time.json").write_text(json.dumps({"threads": args.threads, "load": load, "rows": rows}, indent=2))
+    write_report(args.out, "photo_time", "\n".join(lines) + "\n", {"threads": args.threads, "load": load, "rows": rows})
     return 0
 
 

@@ -85,12 +85,36 @@ def mask_paths(ritm: Path) -> list[tuple[str, str, Path]]:
 read_mask = read_object_mask  # (object, ignore): GrabCut's 128 band unlabelled; Berkeley's 0 / 255
 
 
+def small_mask(obj: np.ndarray) -> np.ndarray:
+    """``obj`` resized so that its longer side is ``RULE_SIDE`` px (area average, > 0.5)."""
+    s = RULE_SIDE / max(obj.shape)
+    return cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
+
+
+def mask_axis(obj: np.ndarray) -> tuple[np.ndarray, float]:
+    """The mask's best reflection axis ``n . (x, y) + c = 0`` (``n`` unit, ``(2,)``) in the
+    mask's own pixels, found on its ``RULE_SIDE``-px copy (:func:`small_mask`)."""
+    s = RULE_SIDE / max(obj.shape)
+    _, n, off = best_reflection_iou(small_mask(obj))
+    off = off + float(n.sum()) * (0.5 * s - 0.5)  # small pixel x_s = (x + 0.5) s - 0.5
+    return np.asarray(n, dtype=np.float64), float(off / s)
+
+
+def symmetric_items(ritm: Path, bsds: Path) -> list[tuple[str, str, Path, Path]]:
+    """``(set, name, image, mask)`` of the images on the committed symmetric list."""
+    sym = {line.strip() for line in LIST.read_text().splitlines() if line.strip() and not line.startswith("#")}
+    out = []
+    for st, name, mpath in mask_paths(ritm):
+        path = image_path(st, name, ritm, bsds)
+        if f"{st}/{name}" in sym and path is not None:
+            out.append((st, name, path, mpath))
+    return out
+
+
 def rule(path: Path) -> dict:
     """The selection rule's figures for one mask (see the module docstring)."""
     obj, band = read_mask(path)
-    obj = obj | band
-    s = RULE_SIDE / max(obj.shape)
-    small = cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
+    small = small_mask(obj | band)
     comp, n = ndimage.label(small, structure=np.ones((3, 3)))
     share = 0.0 if n == 0 else float(np.bincount(comp.reshape(-1))[1:].max() / small.sum())
     iou, _, _ = best_reflection_iou(small)
@@ -139,9 +163,7 @@ def grabcut_box(obj: np.ndarray) -> tuple[int, int, int, int]:
 def axis_probe(obj: np.ndarray, normals: torch.Tensor, offsets: torch.Tensor) -> dict:
     """Angle (deg) between the strongest detected axis and the mask's best reflection axis,
     and the distance (px) of the mask's centroid from the detected axis."""
-    s = RULE_SIDE / max(obj.shape)
-    small = cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
-    _, n_mask, _ = best_reflection_iou(small)
+    _, n_mask, _ = best_reflection_iou(small_mask(obj))
     if len(normals) == 0:
         return {"axis_found": False, "axis_angle_deg": None, "centroid_distance_px": None}
     n = normals[0].double().numpy()

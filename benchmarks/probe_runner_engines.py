@@ -13,7 +13,6 @@ Usage: python benchmarks/probe_runner_engines.py [--work /tmp/bench_runner] [--n
 from __future__ import annotations
 
 import argparse
-import json
 import multiprocessing as mp
 import os
 import statistics
@@ -21,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from report import write_report
 
 HERE = Path(__file__).resolve().parent
 
@@ -95,12 +95,7 @@ def main() -> None:
         ips = [x[0] for x in r]
         lines.append(f"| {name} | {', '.join(f'{v:.2f}' for v in ips)} | {statistics.mean(ips):.2f} | "
                      f"{statistics.mean(ips) / base:.2f}x | {statistics.mean(x[1] for x in r):.3f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "runner_engines.md").write_text(text)
-    (out / "runner_engines.json").write_text(json.dumps({"args": vars(args), "runs": runs}, indent=2))
+    write_report(args.out, "runner_engines", "\n".join(lines) + "\n", {"args": vars(args), "runs": runs})
 
 
 if __name__ == "__main__":

@@ -42,7 +42,6 @@ from torchsym.image.symmetry_map.descriptors import dense_axis_descriptors  # no
 from torchsym.image.symmetry_map.estimate import cluster_field  # noqa: E402
 from torchsym.image.symmetry_map.patchmatch import candidate_cost, grid_index, grid_xy  # noqa: E402
 from torchsym.image.symmetry_map.scores import distance_to_points, symmetry_scores  # noqa: E402
-from torchsym.metrics.masks import best_reflection_iou  # noqa: E402
 from torchsym.metrics.symmetry_map import ssm_scores  # noqa: E402
 
 KEYS = ("detected", "oracle_spread", "oracle_pairs", "exact_descriptor", "exact_colour", "exact_inside", "distance",
@@ -51,11 +50,8 @@ KEYS = ("detected", "oracle_spread", "oracle_pairs", "exact_descriptor", "exact_
 
 def mask_axis(obj: np.ndarray) -> tuple[torch.Tensor, float]:
     """The mask's best reflection axis ``n . (x, y) + c = 0`` in full-resolution pixels."""
-    s = bench.RULE_SIDE / max(obj.shape)
-    small = cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
-    _, n, off = best_reflection_iou(small)
-    off = off + float(n.sum()) * (0.5 * s - 0.5)  # small pixel x_s = (x + 0.5) s - 0.5
-    return torch.tensor(n, dtype=torch.float32), off / s
+    n, c = bench.mask_axis(obj)
+    return torch.tensor(n, dtype=torch.float32), c
 
 
 def spread_pairs(n: torch.Tensor, c: float, h: int, w: int, count: int = 300) -> torch.Tensor:

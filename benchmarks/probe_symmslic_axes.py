@@ -30,7 +30,6 @@ import bench_segmentation as bench  # noqa: E402
 
 from torchsym.image.symmslic import symm_slic  # noqa: E402
 from torchsym.io import read_image  # noqa: E402
-from torchsym.metrics.masks import best_reflection_iou  # noqa: E402
 from torchsym.metrics.superpixels import segmentation_error  # noqa: E402
 
 
@@ -38,22 +37,16 @@ def main() -> int:
     torch.set_num_threads(1)
     cv2.setNumThreads(1)
     ritm, bsds = Path("/work/data/ritm/datasets"), Path("/work/data/bsds/BSDS500")
-    sym = {line.strip() for line in bench.LIST.read_text().splitlines() if line.strip() and not line.startswith("#")}
     params = bench.config_params("image_symmslic")
     gate_off = {**params, "pairs": {**params["pairs"], "min_support": 0.0}}
     rows = []
-    for st, name, mpath in bench.mask_paths(ritm):
-        path = bench.image_path(st, name, ritm, bsds)
-        if f"{st}/{name}" not in sym or path is None:
-            continue
+    for st, name, path, mpath in bench.symmetric_items(ritm, bsds):
         obj, band = bench.read_mask(mpath)
         img = read_image(path)
-        s = bench.RULE_SIDE / max(obj.shape)
-        small = cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
-        _, n, off = best_reflection_iou(small)
+        n, off = bench.mask_axis(obj)
         r0 = symm_slic(img, gate_off)
         p0 = bench.axis_probe(obj, r0.normals, r0.offsets)
-        r1 = symm_slic(img, params, axes=torch.tensor([[n[0], n[1], off / s]]))
+        r1 = symm_slic(img, params, axes=torch.tensor([[n[0], n[1], off]]))
         agree = p0["axis_found"] and p0["axis_angle_deg"] <= 10 and p0["centroid_distance_px"] <= 0.1 * math.hypot(*obj.shape)
         rows.append({"name": f"{st}/{name}", "gate_off_found": p0["axis_found"], "gate_off_agree": bool(agree),
                      "gate_off_error": segmentation_error(r0.mask.numpy(), obj, ignore=band)["over_image"],

@@ -63,7 +63,6 @@ from torchsym.image.symmslic import mirror_correlation, symm_slic  # noqa: E402
 from torchsym.image.symmslic.pairs import mirror_edge_matches  # noqa: E402
 from torchsym.image.symmslic.solver import LAB_SCALE  # noqa: E402
 from torchsym.io import read_image  # noqa: E402
-from torchsym.metrics.masks import best_reflection_iou  # noqa: E402
 from torchsym.metrics.superpixels import mirror_consistency, segmentation_error  # noqa: E402
 
 THRESHOLDS = (0.5, 0.6, 0.7, 0.8, 0.9)
@@ -159,19 +158,12 @@ def _symmetric(mask: np.ndarray, mx: np.ndarray, my: np.ndarray, band: np.ndarra
 
 def seg_part() -> list[dict]:
     ritm, bsds = Path("/work/data/ritm/datasets"), Path("/work/data/bsds/BSDS500")
-    sym = {line.strip() for line in seg.LIST.read_text().splitlines() if line.strip() and not line.startswith("#")}
     params = seg.config_params("image_symmslic")
     rows = []
-    for st, name, mpath in seg.mask_paths(ritm):
-        path = seg.image_path(st, name, ritm, bsds)
-        if f"{st}/{name}" not in sym or path is None:
-            continue
+    for st, name, path, mpath in seg.symmetric_items(ritm, bsds):
         obj, ign = seg.read_mask(mpath)
         img = read_image(path)
-        s = seg.RULE_SIDE / max(obj.shape)
-        small = cv2.resize(obj.astype(np.float32), None, fx=s, fy=s, interpolation=cv2.INTER_AREA) > 0.5
-        _, n, off = best_reflection_iou(small)
-        off = off / s
+        n, off = seg.mask_axis(obj)
         r = symm_slic(img, params, axes=torch.tensor([[n[0], n[1], off]]))
         lab = (kornia.color.rgb_to_lab(img.reshape(-1, *img.shape[-3:])[:1].float())[0] * LAB_SCALE[:, None, None]).numpy()
         ncc, band, (mx, my) = mirror_correlation(lab, np.asarray(n, dtype=np.float64), float(off))

@@ -41,6 +41,7 @@ correspondence rate of 0).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -81,8 +82,18 @@ class GroundTruth:
         for name in (str(input), p.name, p.stem):
             if name in self.items:
                 return self.items[name]
-        prefixed = [k for k in self.items if k.startswith(p.stem + "_")]
+        prefixed = self._by_prefix.get(p.stem, [])
         return self.items[prefixed[0]] if len(prefixed) == 1 else None
+
+    @functools.cached_property
+    def _by_prefix(self) -> dict[str, list[str]]:
+        """Names by each of their prefixes before a ``_`` (``a_b_c``: ``a``, ``a_b``)."""
+        out: dict[str, list[str]] = {}
+        for key in self.items:
+            parts = key.split("_")
+            for i in range(1, len(parts)):
+                out.setdefault("_".join(parts[:i]), []).append(key)
+        return out
 
 
 def _read_axes_txt(path: Path) -> GroundTruth:
