@@ -24,7 +24,7 @@ from torchsym.core.config import PipelineConfig, load_config
 from torchsym.core.results import Result
 from torchsym.errors import ConfigError, InputFileError, InputValueError
 from torchsym.runner.engine import ENGINES, open_engine
-from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key
+from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key, read_results
 from torchsym.runner.task import TaskSpec
 
 __all__ = ["RunSummary", "expand_inputs", "run"]
@@ -182,7 +182,8 @@ def run(
         resume: False starts ``out`` afresh.
         overrides: settings of the config's last solver (``{"n_starts": 2}``, dotted keys
             for groups).
-        figures: folder for each result's pictures (:func:`torchsym.viz.write_artifacts`);
+        figures: folder for each result's pictures (:func:`torchsym.viz.write_artifacts`)
+            and the run's page ``index.html`` (:func:`torchsym.viz.index.write_index`);
             None writes none.
         imports: modules each worker imports first (to register your own solvers).
         max_in_flight: tasks in flight on a Dask engine (default: two per live worker thread, one running and one waiting, so no worker waits for the driver).
@@ -237,6 +238,10 @@ def run(
                 bar.update(1)
             last = time.perf_counter()
         stopping = time.perf_counter() - last
+    if fig_dir is not None:  # the run's page, over every input of the results file (resumed ones too)
+        from torchsym.viz.index import write_index
+
+        write_index(read_results(out, arrays=False), fig_dir, results=out)
     return RunSummary(
         str(out), chosen, len(paths), skipped, counts["ok"], counts["error"], counts["crashed"],
         time.perf_counter() - t0, engine_seconds + stopping,
