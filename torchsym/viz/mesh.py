@@ -75,6 +75,14 @@ def partner_residual(vertices: np.ndarray, vertex_map: np.ndarray, faces: np.nda
     return res
 
 
+def _vertex_map(vertex_map: Any, n_vertices: int) -> np.ndarray:
+    """``(V,)`` int64 map; a map of another mesh (wrong length or index) as no map (all ``-1``)."""
+    vmap = np.asarray(vertex_map).reshape(-1).astype(np.int64)
+    if vmap.shape[0] != n_vertices or (vmap >= n_vertices).any():
+        return np.full(n_vertices, -1)
+    return np.where(vmap < 0, -1, vmap)
+
+
 def _mesh_area(v: np.ndarray, f: np.ndarray) -> float:
     if len(f) == 0:
         return 0.0
@@ -200,9 +208,7 @@ def plot_mesh_symmetry(
 
     v = mesh.vertices.detach().cpu().double().numpy()  # (V, 3)
     f = mesh.faces.detach().cpu().numpy().reshape(-1, 3)  # (F, 3)
-    vmap = np.asarray(vertex_map).reshape(-1).astype(np.int64)
-    if vmap.shape[0] != v.shape[0] or (vmap >= v.shape[0]).any():
-        vmap = np.full(v.shape[0], -1)  # a map of another mesh: drawn as no map
+    vmap = _vertex_map(vertex_map, v.shape[0])
     tol = np.sqrt(_mesh_area(v, f) / (20.0 * np.pi))
     residual = partner_residual(v, vmap, f)
     good = residual <= tol  # (V,)
@@ -253,7 +259,7 @@ def write_mesh_symmetry(result: IntrinsicSymmetryResult, data: Any, out_dir: Pat
     vmap = result.map.detach().cpu().numpy()
     paths = []
     if isinstance(data, Mesh):
-        colors = symmetry_colors(data.vertices.detach().cpu().double().numpy(), vmap)
+        colors = symmetry_colors(data.vertices.detach().cpu().double().numpy(), _vertex_map(vmap, data.vertices.shape[0]))
         paths.append(write_mesh(out_dir / f"{stem}_symmetry.ply", data, colors=colors))
         score = getattr(result, "score", None)
         paths.append(plot_mesh_symmetry(data, vmap, out_dir / f"{stem}_symmetry.png", title=stem, score=None if score is None else float(score)))

@@ -47,7 +47,7 @@ def draw_plane_in_photos(
 ) -> Path:
     """PNG: up to ``max_photos`` photos, each with the plane's patch over the supporting
     pairs drawn translucent, its outline, and up to ``max_pairs`` inlier pairs joined
-    (green, ends in orange and blue)."""
+    (green, ends in orange and blue); without a readable photo, a picture that says so."""
     pts = result.points.double()
     inl = result.pairs[result.inliers].numpy()
     if len(inl) > max_pairs:
@@ -80,8 +80,9 @@ def draw_plane_in_photos(
         cv2.putText(tile, name, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (255, 255, 255), 2, cv2.LINE_AA)
         tiles.append(tile)
     path = Path(path)
-    if not tiles:
-        return path
+    if not tiles:  # no photo to draw on: the picture says why
+        tiles = [np.full((240, width, 3), 255, np.uint8)]
+        cv2.putText(tiles[0], "no photo of the scene could be read", (8, 120), cv2.FONT_HERSHEY_SIMPLEX, 0.7, (0, 0, 0), 2, cv2.LINE_AA)
     th = max(t.shape[0] for t in tiles)
     tiles = [cv2.copyMakeBorder(t, 0, th - t.shape[0], 0, 0, cv2.BORDER_CONSTANT, value=(255, 255, 255)) for t in tiles]
     cols = min(4, len(tiles))
@@ -102,13 +103,23 @@ def draw_plane_in_photos(
 
 def plot_multiview_plane(result: MultiviewPlaneResult, path: str | Path, *, max_pairs: int = 80) -> Path:
     """PNG: the sparse points in their colours, seen with the plane edge-on (from two
-    sides) and along its normal, the supporting pairs joined."""
+    sides) and along its normal, the supporting pairs joined; with fewer than 3 points, a
+    picture that says so."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    p = result.points.double().numpy()
+    p = result.points.double().numpy().reshape(-1, 3)
+    if len(p) < 3:  # too few points for a frame: the title says what was found
+        fig, ax = plt.subplots(figsize=(8, 3))
+        ax.set_axis_off()
+        ax.text(0.5, 0.5, f"{len(p)} reconstructed points: nothing to draw", ha="center", va="center", fontsize=12)
+        fig.suptitle(("plane found" if result.found else "no symmetry found: " + "; ".join(result.notes))[:160], fontsize=10)
+        path = Path(path)
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        return path
     lo, hi = np.quantile(p, 0.02, 0), np.quantile(p, 0.98, 0)
     keep = ((p >= lo) & (p <= hi)).all(1)
     col = result.colors.numpy() / 255.0

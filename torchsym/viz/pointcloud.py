@@ -58,11 +58,13 @@ def reflection_plane_ply(points: torch.Tensor, result: Any, path: str | Path, *,
     return write_ply(path, verts, colors=colors, faces=faces, edges=pairs)
 
 
-def plot_reflection_plane(points: torch.Tensor, result: Any, path: str | Path, *, max_points: int = 8000, max_pairs: int = 80) -> Path:
+def plot_reflection_plane(
+    points: torch.Tensor, result: Any, path: str | Path, *, max_points: int = 8000, max_pairs: int = 80, title: str = ""
+) -> Path:
     """PNG with three views in the plane's own frame: two with the plane edge-on (a
     vertical line, so the two sides can be compared by eye) and one looking along the
     normal. Points are coloured by side (grey: no mirror found); black segments join a
-    few mirror pairs."""
+    few mirror pairs. The title starts with ``title`` (the file) and says when no pair was found."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -96,9 +98,15 @@ def plot_reflection_plane(points: torch.Tensor, result: Any, path: str | Path, *
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xticks([])
         ax.set_yticks([])
+    n_pairs = int((result.pairs[:, 0] != result.pairs[:, 1]).sum()) if len(result.pairs) else 0
+    found = (
+        f"{n_pairs} mirror pairs, a sample joined by black lines (orange / blue: the two sides; grey: no mirror)"
+        if n_pairs
+        else "no mirror pairs found: the plane is drawn, no point is matched across it"
+    )
     fig.suptitle(
-        f"reflection plane n = ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), offset {b:.3f}; symmetry score {result.score:.2f}; "
-        f"{len(result.pairs)} mirror pairs (orange/blue: the two sides, grey: no mirror)",
+        f"{title + ': ' if title else ''}{len(p)} point{'s' if len(p) != 1 else ''}, symmetry score {result.score:.2f}; {found}\n"
+        f"plane n = ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), offset {b:.3f}",
         fontsize=10,
     )
     fig.tight_layout()
@@ -116,5 +124,5 @@ def write_reflection_plane(result: ReflectionPlaneResult, data: torch.Tensor, ou
     out_dir = Path(out_dir)
     return [
         reflection_plane_ply(data, result, out_dir / f"{stem}_plane.ply"),
-        plot_reflection_plane(data, result, out_dir / f"{stem}_plane.png"),
+        plot_reflection_plane(data, result, out_dir / f"{stem}_plane.png", title=stem),
     ]

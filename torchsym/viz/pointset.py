@@ -179,11 +179,13 @@ def plot_image_axis(image: Any, result: ImageAxisResult, path: str | Path, *, ma
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()
-    ax.legend(loc="lower right", fontsize=8, framealpha=0.85)
-    ax.set_title(
-        f"PointSymm on Harris corners: score {result.score:.2f} ({int(inl.sum())} of {len(inl)} corners mirrored)",
-        fontsize=11,
-    )
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower right", fontsize=8, framealpha=0.85)
+    if np.isfinite(seg).all() and inl.any():
+        head = f"PointSymm on Harris corners: score {result.score:.2f} ({int(inl.sum())} of {len(inl)} corners mirrored)"
+    else:
+        head = f"PointSymm on Harris corners: no symmetry axis found ({len(inl)} corners, none mirrored)"
+    ax.set_title(head, fontsize=11)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

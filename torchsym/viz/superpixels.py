@@ -13,6 +13,7 @@ from torchsym.core.checks import check_image
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.metrics.superpixels import boundary_map
 from torchsym.viz import artifact_writer
+from torchsym.viz.annotate import banner
 
 __all__ = ["draw_superpixels", "write_symmslic_artifacts"]
 
@@ -25,7 +26,8 @@ def _bgr(image: Any) -> np.ndarray:
 
 def draw_superpixels(result: SymmSlicResult, image: Any) -> np.ndarray:
     """BGR picture: each mirror superpixel pair tinted in one colour with white borders,
-    the unpaired superpixels faded to grey with grey borders, the axes in red."""
+    the unpaired superpixels faded to grey with grey borders, the axes in red; a line at the
+    top says when no pair was found."""
     out = _bgr(image)
     lbl = result.labels.numpy()
     rng = np.random.default_rng(0)
@@ -49,6 +51,8 @@ def draw_superpixels(result: SymmSlicResult, image: Any) -> np.ndarray:
         ok, a, z = cv2.clipLine((0, 0, w, h), tuple(int(v) for v in p0), tuple(int(v) for v in p1))
         if ok:
             cv2.line(out, a, z, (0, 0, 255), 2, cv2.LINE_AA)
+    if len(result.pairs) == 0:
+        banner(out, "no mirror superpixel pairs found")
     return out
 
 

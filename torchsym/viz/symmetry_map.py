@@ -11,6 +11,7 @@ import torch
 from torchsym.image.symmetry_map.result import StylizedResult, SymmetryMapResult
 from torchsym.metrics.symmetry_map import reconstruct_mirror
 from torchsym.viz import artifact_writer
+from torchsym.viz.annotate import banner
 
 __all__ = ["nmrf_hsv", "write_stylized", "write_symmetry_map"]
 
@@ -69,6 +70,8 @@ def _pairs_picture(result: SymmetryMapResult, max_pairs: int = 40) -> np.ndarray
         (tw, th), _ = cv2.getTextSize(label, cv2.FONT_HERSHEY_SIMPLEX, 0.6, 1)
         cv2.rectangle(img, (4, 6 + 24 * k), (12 + tw, 12 + th + 24 * k), (255, 255, 255), -1)
         cv2.putText(img, label, (8, 8 + th + 24 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.6, col, 1, cv2.LINE_AA)
+    if len(result.lines) == 0:
+        banner(img, "no symmetry axis found")
     return img
 
 
@@ -77,7 +80,8 @@ def write_symmetry_map(result: SymmetryMapResult, data: Any, out_dir: Path, stem
     """Per axis ``h``: ``{stem}_nmrf{h}.png`` (HSV picture), ``{stem}_ssm{h}.png`` (grey),
     ``{stem}_im{h}.png`` (``Im = S I(f)``) and ``{stem}_nmrf{h}.npy`` (``(H, W, 2)`` float32
     ``x, y``); ``{stem}_pairs.png`` (each axis with up to 40 of its
-    cluster's pairs in its colour). With no axis: ``{stem}_ssm.png``, all black."""
+    cluster's pairs in its colour). With no axis: ``{stem}_pairs.png`` says so and
+    ``{stem}_ssm.png`` is all black."""
     import cv2
 
     out = Path(out_dir)
