@@ -42,6 +42,13 @@ def _side_colors(points: torch.Tensor, result: Any) -> np.ndarray:
     return col
 
 
+def _signed(axis: np.ndarray) -> np.ndarray:
+    """``axis (3,)`` made unit and signed so its largest coordinate is positive: the file's
+    ``+y`` stays up in a picture when ``axis`` is near ``y`` (the same cloud always looks the same)."""
+    axis = axis / max(float(np.linalg.norm(axis)), np.finfo(float).tiny)
+    return axis * (1.0 if axis[np.argmax(np.abs(axis))] >= 0 else -1.0)
+
+
 def reflection_plane_ply(points: torch.Tensor, result: Any, path: str | Path, *, max_pairs: int = 400) -> Path:
     """PLY: points coloured by side (grey: no mirror found), the plane as two triangles,
     and up to ``max_pairs`` mirror pairs as edges (open in MeshLab or CloudCompare)."""
@@ -76,9 +83,8 @@ def plot_reflection_plane(
     col = _side_colors(points, result)
     proj = p - np.outer(p @ n + b, n)
     _, _, vt = np.linalg.svd(proj - proj.mean(0), full_matrices=False)
-    e2 = vt[0] - (vt[0] @ n) * n
-    e2 /= np.linalg.norm(e2)
-    e3 = np.cross(n, e2)
+    e2 = _signed(vt[0] - (vt[0] @ n) * n)
+    e3 = _signed(np.cross(n, e2))
     coords = np.stack([p @ n + b, p @ e2, p @ e3], 1)  # (N, 3): distance to plane, two in-plane axes
     idx = np.linspace(0, len(p) - 1, min(max_points, len(p))).astype(int)
     pairs = result.pairs.cpu().numpy()
@@ -86,15 +92,15 @@ def plot_reflection_plane(
     if len(pairs) > max_pairs:
         pairs = pairs[np.linspace(0, len(pairs) - 1, max_pairs).astype(int)]
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.8))
-    views = [(0, 2, "plane edge-on (view 1)", True), (0, 1, "plane edge-on (view 2)", True), (1, 2, "along the normal", False)]
-    for ax, (i, j, title, edge) in zip(axes, views):
+    views = [(0, 2, "plane edge-on, looking along the long axis", True), (0, 1, "plane edge-on, turned 90 degrees", True), (1, 2, "looking along the plane's normal", False)]
+    for ax, (i, j, label, edge) in zip(axes, views):
         ax.scatter(coords[idx, i], coords[idx, j], c=col[idx], s=1.2, linewidths=0)
         for a_, b_ in pairs:
             ax.plot(coords[[a_, b_], i], coords[[a_, b_], j], color="k", lw=0.4, alpha=0.5)
         if edge:
             ax.axvline(0.0, color="#2ca02c", lw=2, label="detected plane")
             ax.legend(loc="lower right", fontsize=8)
-        ax.set_title(title, fontsize=10)
+        ax.set_title(label, fontsize=10)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xticks([])
         ax.set_yticks([])
