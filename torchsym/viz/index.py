@@ -30,10 +30,10 @@ th,td{border-bottom:1px solid #ddd;padding:4px 8px;text-align:left;vertical-alig
 th{background:#f3f3f3;cursor:pointer;user-select:none;position:sticky;top:0}
 th.sorted-asc::after{content:" \\25B2"}th.sorted-desc::after{content:" \\25BC"}
 td.num{text-align:right;font-variant-numeric:tabular-nums}
-img.thumb{max-width:180px;max-height:110px;display:block}
+img.thumb{max-width:240px;max-height:150px;display:block}
 .ok{color:#1a7f37}.error{color:#b42318}.crashed{color:#b42318;font-weight:bold}
-.msg{font-family:monospace;font-size:90%;max-width:40em;white-space:pre-wrap;word-break:break-word}
-.links a{margin-right:.6em}
+.msg{font-family:monospace;font-size:85%;min-width:22em;max-width:40em;white-space:pre-wrap;overflow-wrap:anywhere}
+.links{font-size:85%}.links a{display:block;white-space:nowrap}
 """
 
 # sorts the table by a clicked column: numbers by data-sort, missing values last
