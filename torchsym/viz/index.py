@@ -32,7 +32,8 @@ th.sorted-asc::after{content:" \\25B2"}th.sorted-desc::after{content:" \\25BC"}
 td.num{text-align:right;font-variant-numeric:tabular-nums}
 img.thumb{max-width:240px;max-height:150px;display:block}
 .ok{color:#1a7f37}.error{color:#b42318}.crashed{color:#b42318;font-weight:bold}
-.msg{font-family:monospace;font-size:85%;min-width:22em;max-width:40em;white-space:pre-wrap;overflow-wrap:anywhere}
+.msg{font-family:monospace;font-size:85%;max-width:40em;white-space:pre-wrap;overflow-wrap:anywhere}
+.msg:not(:empty){min-width:22em}
 .links{font-size:85%}.links a{display:block;white-space:nowrap}
 """
 
