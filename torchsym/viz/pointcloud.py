@@ -94,7 +94,7 @@ def plot_reflection_plane(
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.8))
     views = [(0, 2, "plane edge-on, looking along the long axis", True), (0, 1, "plane edge-on, turned 90 degrees", True), (1, 2, "looking along the plane's normal", False)]
     for ax, (i, j, label, edge) in zip(axes, views):
-        ax.scatter(coords[idx, i], coords[idx, j], c=col[idx], s=1.2, linewidths=0)
+        ax.scatter(coords[idx, i], coords[idx, j], c=col[idx], s=float(np.clip(3000.0 / len(idx), 1.2, 16.0)), linewidths=0)
         for a_, b_ in pairs:
             ax.plot(coords[[a_, b_], i], coords[[a_, b_], j], color="k", lw=0.4, alpha=0.5)
         if edge:
