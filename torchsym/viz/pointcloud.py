@@ -105,14 +105,15 @@ def plot_reflection_plane(
         ax.set_xticks([])
         ax.set_yticks([])
     n_pairs = int((result.pairs[:, 0] != result.pairs[:, 1]).sum()) if len(result.pairs) else 0
-    found = (
-        f"{n_pairs} mirror pairs, a sample joined by black lines (orange / blue: the two sides; grey: no mirror)"
+    found = f"{n_pairs} mirror pairs, {len(result.pairs) - n_pairs} points on the plane" if n_pairs else "no mirror pairs found"
+    key = (
+        "orange / blue: the two sides, grey: no mirror; black lines join a sample of pairs"
         if n_pairs
-        else "no mirror pairs found: the plane is drawn, no point is matched across it"
+        else "the plane is drawn, no point is matched across it"
     )
     fig.suptitle(
         f"{title + ': ' if title else ''}{len(p)} point{'s' if len(p) != 1 else ''}, symmetry score {result.score:.2f}; {found}\n"
-        f"plane n = ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), offset {b:.3f}",
+        f"{key}; plane n = ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), offset {b:.3f}",
         fontsize=10,
     )
     fig.tight_layout()
