@@ -129,13 +129,15 @@ def mesh_frame(vertices: np.ndarray, vertex_map: np.ndarray) -> tuple[np.ndarray
 
 def _visible(xy: np.ndarray, depth: np.ndarray, radius: float) -> np.ndarray:
     """``(V,)`` bool: the vertex is (nearly) the nearest to the viewer among the vertices
-    drawn within ``radius`` of it (``depth`` grows towards the viewer)."""
-    from scipy.spatial import cKDTree
+    drawn around it (``depth`` grows towards the viewer): a depth buffer of cells of side
+    ``radius``, each cell compared with the nearest depth in it and its 8 neighbours."""
+    from scipy.ndimage import maximum_filter
 
-    tree = cKDTree(xy)
-    near = tree.query_ball_point(xy, radius)
-    front = np.array([depth[i].max() for i in near])
-    return depth >= front - radius
+    cell = np.floor((xy - xy.min(axis=0)) / max(radius, np.finfo(float).tiny)).astype(np.int64)  # (V, 2)
+    front = np.full(tuple(cell.max(axis=0) + 1), -np.inf)
+    np.maximum.at(front, (cell[:, 0], cell[:, 1]), depth)
+    front = maximum_filter(front, size=3, mode="constant", cval=-np.inf)
+    return depth >= front[cell[:, 0], cell[:, 1]] - radius
 
 
 def _sample_pairs(xy: np.ndarray, candidates: np.ndarray, cells: int) -> np.ndarray:
