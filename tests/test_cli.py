@@ -33,12 +33,12 @@ class TestCLI:
     def test_bad_input(self, tmp_path, capsys):
         bad = tmp_path / "x.ply"
         bad.write_text("nonsense")
-        assert main(["detect", str(bad), "--out", str(tmp_path)]) == 2
+        assert main(["detect", str(bad), "--out", str(tmp_path)]) == 1  # the input failed
         assert "cannot read" in capsys.readouterr().err
 
     def test_unknown_setting(self, tmp_path, capsys):
         code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_strats=2"])
-        assert code == 2 and "did you mean 'n_starts'" in capsys.readouterr().err
+        assert code == 1 and "did you mean 'n_starts'" in capsys.readouterr().err
 
     def test_out_that_cannot_be_created(self, tmp_path, capsys):
         blocker = tmp_path / "file.txt"
@@ -58,7 +58,7 @@ class TestCLI:
         before = (tmp_path / "chair_plane.ply").read_bytes()
         code = main(["detect", str(tmp_path), "--out", str(tmp_path), "-q"])
         err = capsys.readouterr().err
-        assert code == 2 and "would overwrite the input" in err and "chair_plane.ply" in err
+        assert code == 1 and "would overwrite the input" in err and "chair_plane.ply" in err
         assert (tmp_path / "chair_plane.ply").read_bytes() == before
         assert not (tmp_path / "chair.json").exists()  # nothing of the refused input was written
         assert (tmp_path / "chair_plane.json").is_file() and (tmp_path / "chair_plane_plane.ply").is_file()
@@ -86,10 +86,10 @@ class TestCLI:
     def test_unique_stems(self):
         from pathlib import Path
 
-        from torchsym.cli import _unique_stems
+        from torchsym.io.inputs import unique_stems
 
         names = ["a/chair.xyz", "a/chair.npy", "b/chair.xyz", "a/chair_xyz.txt", "a/chair_xyz_2.pts", "a/table.ply"]
-        stems = _unique_stems([Path(n) for n in names])
+        stems = unique_stems([Path(n) for n in names])
         assert len(set(stems)) == len(stems) and stems[-1] == "table" and stems[3:5] == ["chair_xyz", "chair_xyz_2"]
 
 
@@ -116,7 +116,7 @@ class TestCLIFiles:
         before = cfg.read_bytes()
         code = main(["detect", str(scan), "--config", str(cfg), "--out", str(tmp_path), "-q", "--no-figures"])
         line = _one_error_line(capsys.readouterr().err)
-        assert code == 2 and "would overwrite the input" in line and "scan.json" in line
+        assert code == 1 and "would overwrite the input" in line and "scan.json" in line
         assert cfg.read_bytes() == before
 
     def test_second_run_over_its_own_outputs(self, tmp_path, capsys):
@@ -138,7 +138,7 @@ class TestCLIFiles:
 
     def test_empty_input_refused(self, capsys):
         assert main(["detect", "", "-q"]) == 2
-        assert "INPUT: expected a file or folder" in _one_error_line(capsys.readouterr().err)
+        assert "inputs: expected a file, folder or glob pattern" in _one_error_line(capsys.readouterr().err)
 
     @pytest.mark.parametrize("value", [
         "!!python/object/apply:os.system [echo hi]",  # ConstructorError
@@ -166,7 +166,7 @@ class TestCLIFiles:
         d.mkdir()
         (d / "a_empty.npy").write_bytes(b"")
         _small_cloud(d / "b.xyz")
-        assert main(["detect", str(d), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 2
+        assert main(["detect", str(d), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 1
         err = capsys.readouterr().err
         assert "a_empty.npy" in err and "cannot read" in err and "1 of 2 inputs failed" in err
         assert json.loads((tmp_path / "o" / "b.json").read_text())["result"]["type"] == "ReflectionPlaneResult"
