@@ -178,3 +178,71 @@ class TestCLIFiles:
         assert out.returncode == 2
         _one_error_line(out.stderr)
         assert not [q for q in tmp_path.iterdir() if q.name != "torchsym-out"]
+
+
+class TestInputsAsUsersHaveThem:
+    def test_cad_mesh_gets_its_plane_with_no_flags(self, tmp_path, capsys):
+        import math
+
+        import torch
+        from cad_models import cad_chair, write_obj
+
+        from torchsym.geometry import plane_angle
+
+        mesh, normal, _ = cad_chair()
+        path = write_obj(tmp_path / "model.obj", mesh)
+        assert main(["detect", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+        err = capsys.readouterr().err
+        assert "the intrinsic (mesh) pipeline cannot take this mesh" in err and "non-manifold" in err
+        record = json.loads((tmp_path / "o" / "model.json").read_text())
+        assert record["result"]["type"] == "ReflectionPlaneResult" and record["config"]["surface"]["points"] == 20000
+        angle = float(plane_angle(torch.tensor(record["result"]["normal"], dtype=torch.float64), normal)) * 180 / math.pi
+        assert angle < 1.0
+        # --kind still forces either: the intrinsic pipeline refuses the non-manifold edge
+        assert main(["detect", str(path), "--out", str(tmp_path / "m"), "-q", "--kind", "mesh"]) == 1
+        assert "non-manifold edges" in capsys.readouterr().err
+
+    def test_surface_not_vertices(self, tmp_path):
+        # a mesh given to a point pipeline is sampled on its surface, area-weighted, seeded
+        from cad_models import cad_chair
+
+        from torchsym.api import prepare
+
+        mesh, _, _ = cad_chair()
+        cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "pointcloud_plane.yaml"
+        a = prepare(mesh, cfg, overrides={"surface.points": 3000})
+        assert a.kind == "pointcloud" and a.data.shape == (3000, 3) and "sampled 3000 points" in a.notes[0]
+        assert torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000}).data)
+        assert not torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000, "surface.seed": 1}).data)
+
+    def test_multiview_folder_reproduces_the_function(self, tmp_path, capsys):
+        from test_contract import _scene_folder
+
+        from torchsym.multiview import detect_multiview_plane
+
+        cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "multiview_plane.yaml"
+        scenes = tmp_path / "scenes"
+        _scene_folder(scenes / "a", seed=2)
+        _scene_folder(scenes / "b", seed=3)
+        expected = {name: detect_multiview_plane(scenes / name) for name in ("a", "b")}
+        # torchsym detect FOLDER: one input, K.txt skipped with a note
+        assert main(["detect", str(scenes / "a"), "--config", str(cfg), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 0
+        assert "K.txt" in capsys.readouterr().err
+        record = json.loads((tmp_path / "o" / "a.json").read_text())
+        assert record["result"]["normal"] == expected["a"].normal.tolist()
+        # the API with a list of paths and kind="multiview"
+        photos = sorted(str(p) for p in (scenes / "a").glob("*.png"))
+        assert torchsym.detect(photos, kind="multiview").normal.tolist() == expected["a"].normal.tolist()
+        # torchsym run over a folder of scenes: one record per scene
+        out = tmp_path / "r.jsonl"
+        assert main(["run", str(cfg), "--inputs", str(scenes), "--out", str(out), "--engine", "serial", "-q"]) == 0
+        records = {Path(r["input"]).name: r for r in torchsym.read_results(out)}
+        assert sorted(records) == ["a", "b"]
+        for name in ("a", "b"):
+            assert records[name]["result"]["normal"] == expected[name].normal.tolist()
+
+
+def torch_equal(a, b) -> bool:
+    import torch
+
+    return bool(torch.equal(a, b))

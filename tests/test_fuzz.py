@@ -301,7 +301,7 @@ def test_detect_on_arrays(x):
 
 @pytest.mark.parametrize("kind", ["bogus", 3])
 def test_detect_unknown_kind(kind):
-    with pytest.raises(TorchsymError, match=r"kind: expected one of pointcloud, points, image, mesh or None, got"):
+    with pytest.raises(TorchsymError, match=r"kind: expected one of pointcloud, points, image, mesh, multiview or None, got"):
         torchsym.detect(torch.rand(10, 3), kind=kind)
 
 

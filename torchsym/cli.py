@@ -158,7 +158,7 @@ def detect_files(
         raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
     specs = [
         TaskSpec(i, s.name, cfg.to_dict() if cfg is not None else None, 2, str(staging) if figures else None, s.stem,
-                 max_inline=None, files=s.files, kind=kind, overrides={} if cfg is not None else overrides)
+                 max_inline=None, files=s.files, kind=kind, overrides={} if cfg is not None else overrides, notes=s.notes)
         for i, s in enumerate(sources)
     ]
     written: set[Path] = set()

@@ -172,9 +172,6 @@ def run(
     cfg_dict = cfg.to_dict()
     sources = expand_inputs(inputs, cfg.input)
     _check_kinds(cfg, sources)
-    for s in sources:
-        for note in s.notes:
-            logger.warning("%s: %s", s.name, note)
     digest = config_hash(cfg_dict)
     keys = [input_key(s.name, digest, s.files) for s in sources]
     threads = int(threads_per_worker)
@@ -185,7 +182,7 @@ def run(
             logger.warning("%s: cut a torn last line (%d bytes)", out, store.torn_bytes)
         todo = [i for i, k in enumerate(keys) if not store.is_done(k)]
         specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, sources[i].stem, tuple(imports), max_inline,
-                          tuple(str(Path(f).resolve()) for f in sources[i].files)) for i in todo]
+                          tuple(str(Path(f).resolve()) for f in sources[i].files), notes=sources[i].notes) for i in todo]
         chosen = _choose_engine(engine, len(specs), address)
         skipped = len(sources) - len(specs)
         with _progress(len(sources), skipped, progress) as bar, open_engine(
@@ -195,6 +192,8 @@ def run(
             for spec, outcome, attempts in outcomes:
                 store.append(_record(store, keys[spec.index], outcome, attempts))
                 counts[outcome["status"]] += 1
+                for note in outcome.get("notes") or []:
+                    logger.warning("%s: %s", spec.input, note)
                 if outcome["status"] == "crashed":
                     logger.warning("%s: crashed on every attempt (%d)", spec.input, attempts)
                 bar.set_postfix(ok=counts["ok"], error=counts["error"], crashed=counts["crashed"], refresh=False)

@@ -41,6 +41,7 @@ class TaskSpec:
         files: the files read (:attr:`torchsym.io.inputs.Source.files`); empty: ``input``.
         kind: the input kind forced (``--kind``), or None.
         overrides: settings applied to a default pipeline (``config`` None).
+        notes: what the input expansion skipped for this input.
     """
 
     index: int
@@ -54,6 +55,7 @@ class TaskSpec:
     files: tuple[str, ...] = ()
     kind: str | None = None
     overrides: dict[str, Any] = dataclasses.field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
 
 def _error(exc: BaseException) -> dict[str, Any]:
@@ -94,7 +96,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         from torchsym.core.config import load_config
         from torchsym.io.inputs import Source
 
-        source = Source(spec.input, spec.files or (spec.input,), spec.stem)
+        source = Source(spec.input, spec.files or (spec.input,), spec.stem, spec.notes)
         cfg = load_config(spec.config) if spec.config is not None else None
         prepared = prepare(source, cfg, kind=spec.kind, overrides=spec.overrides)
         out["kind"], out["notes"], out["config"] = prepared.kind, list(prepared.notes), prepared.config.to_dict()
