@@ -25,7 +25,6 @@ Writes ``benchmarks/results/scores.md`` and ``scores.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import statistics
 import time
@@ -39,6 +38,7 @@ from torchsym.core.registry import SOLVERS
 from torchsym.image.synthetic import mirrored_objects_image, mirrored_texture_image
 from torchsym.pointcloud.synthetic import mirror_complete, sample_surface
 from torchsym.pointset import make_symmetric_pointset
+from report import write_report  # benchmarks/report.py
 
 HERE = Path(__file__).resolve().parent
 MESHES = HERE.parent.parent / "shared" / "data" / "meshes"
@@ -209,12 +209,7 @@ def main() -> None:
             continue
         rows.append(run_solver(name, entry.kind, inputs[entry.kind]))
         log.info("%s done in %.0f s", name, rows[-1]["seconds"])
-    md = to_markdown(rows, skipped)
-    print(md)
-    out = HERE / "results"
-    out.mkdir(exist_ok=True)
-    (out / "scores.md").write_text(md)
-    (out / "scores.json").write_text(json.dumps({"rows": rows, "skipped": skipped}, indent=2))
+    write_report(HERE / "results", "scores", to_markdown(rows, skipped), {"rows": rows, "skipped": skipped})
 
 
 if __name__ == "__main__":
