@@ -90,6 +90,6 @@ def add_parsers(sub: Any) -> None:
         ),
     )
     e.add_argument("results", help="the JSON-lines results file of torchsym run")
-    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: docs/design/runner.md)")
+    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: the docstring of torchsym.runner.evaluate)")
     e.add_argument("--json", metavar="FILE", help="also write the figures, per input too, as JSON")
     e.set_defaults(func=_cmd_evaluate)
