@@ -78,6 +78,8 @@ def _place(record: dict[str, Any], staging: Path, out: Path, stem: str, protecte
     run already wrote (``written``, updated here) is refused with :class:`InputFileError`
     before anything of this input is moved.
     """
+    import shutil
+
     from torchsym.errors import InputFileError
     from torchsym.io.inputs import MANIFEST, own_outputs
     from torchsym.io.write import write_json
@@ -96,14 +98,16 @@ def _place(record: dict[str, Any], staging: Path, out: Path, stem: str, protecte
                 f"--out: writing the results of '{stem}' into '{out}' would overwrite '{out / name}', written earlier in this run"
             )
         for name in names:
+            if (out / name).is_dir():  # a folder an earlier run wrote (a scene's COLMAP model)
+                shutil.rmtree(out / name)
             (staging / name).replace(out / name)
             written.add((out / name).resolve())
         write_json({"outputs": sorted(own_outputs(out) | set(names))}, out / MANIFEST)
     except OSError as exc:
         raise InputFileError(f"--out: cannot write the results of '{stem}' into '{out}' ({exc.strerror or exc})") from None
-    finally:
+    finally:  # what was not moved (a refused input's files) goes
         for q in staging.iterdir():
-            q.unlink()
+            shutil.rmtree(q) if q.is_dir() else q.unlink()
     return [str(out / name) for name in names]
 
 
@@ -153,7 +157,7 @@ def detect_files(
     # never written: the inputs and the config file
     protected = frozenset([_resolve(Path(f)) for s in sources for f in s.files] + ([_resolve(Path(config))] if config else []))
     try:
-        staging = Path(tempfile.mkdtemp(prefix=".torchsym-", dir=out))
+        staging = Path(tempfile.mkdtemp(prefix=".torchsym-staging-", dir=out))
     except OSError as exc:
         raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
     specs = [
