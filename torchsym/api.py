@@ -117,8 +117,8 @@ def prepare(
       with a note.
 
     ``overrides`` (checked) apply to the chosen config: its last solver's settings, and
-    ``surface.points`` / ``surface.seed``. Tensors and arrays are checked here (dense, real, finite, no stray coordinate) and
-    detached: ``detect`` does not carry gradients.
+    ``surface.points`` / ``surface.seed``. Tensors and arrays are checked here (dense,
+    real, finite, no stray coordinate) and detached: ``detect`` does not carry gradients.
 
     Raises:
         InputValueError: an unknown ``kind``; a path naming several inputs.
@@ -145,13 +145,11 @@ def prepare(
     if cfg is None:
         problem = _intrinsic_refusal(data) if found == "mesh" and kind is None else None
         if problem is not None:
-            cfg = default_config("pointcloud")
             notes.append(
-                f"the intrinsic (mesh) pipeline cannot take this mesh ({problem}): ran the point-cloud pipeline on "
-                f"{cfg.surface.points} points sampled on its surface (--kind mesh forces the mesh pipeline)"
+                f"the intrinsic (mesh) pipeline cannot take this mesh ({problem}): the point-cloud pipeline runs on "
+                "its surface instead (--kind mesh forces the mesh pipeline)"
             )
-        else:
-            cfg = default_config(kind or found)
+        cfg = default_config("pointcloud" if problem is not None else kind or found)
     cfg = cfg.with_overrides(dict(overrides or {}))
     if found == "mesh" and cfg.input in ("pointcloud", "points"):
         notes.append(
