@@ -235,6 +235,7 @@ class TestInputsAsUsersHaveThem:
         # the API with a list of paths and kind="multiview"
         photos = sorted(str(p) for p in (scenes / "a").glob("*.png"))
         assert torchsym.detect(photos, kind="multiview").normal.tolist() == expected["a"].normal.tolist()
+        assert torchsym.detect(scenes / "a").normal.tolist() == expected["a"].normal.tolist()  # a folder: one scene
         # torchsym run over a folder of scenes: one record per scene
         out = tmp_path / "r.jsonl"
         assert main(["run", str(cfg), "--inputs", str(scenes), "--out", str(out), "--engine", "serial", "-q"]) == 0

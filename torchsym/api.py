@@ -53,11 +53,15 @@ def _is_paths(x: Any) -> bool:
     )
 
 
+def _several(input: Any) -> bool:
+    """Whether ``input`` names several files: a list of paths, a folder or a glob."""
+    paths = [input] if isinstance(input, (str, Path)) else list(input)
+    return len(paths) > 1 or Path(paths[0]).is_dir() or not Path(paths[0]).exists()
+
+
 def _source(input: Any, want: str | None) -> Source:
     """The one :class:`Source` that a path, folder, glob or list of paths names."""
     paths = [input] if isinstance(input, (str, Path)) else list(input)
-    if want is None and (len(paths) > 1 or Path(paths[0]).is_dir()):
-        want = "multiview"  # several files are one input only as the photos of a scene
     sources = expand_inputs(paths, want)
     if len(sources) != 1:
         names = ", ".join(s.name for s in sources[:3])
@@ -132,6 +136,8 @@ def prepare(
     want = kind or (cfg.input if cfg is not None else None)
     notes: list[str] = []
     if isinstance(input, Source) or _is_paths(input):
+        if want is None and not isinstance(input, Source) and _several(input):
+            want = "multiview"  # several files are one input only as the photos of a scene
         source = input if isinstance(input, Source) else _source(input, want)
         notes += source.notes
         found, data = _read(source, want)
