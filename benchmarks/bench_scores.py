@@ -19,7 +19,7 @@ above an asymmetric one, ties counting half). Solvers without a scalar score, an
 ``multiview_plane`` (minutes per scene), are listed without figures, with the reason.
 Writes ``benchmarks/results/scores.md`` and ``scores.json``.
 
-    python benchmarks/bench_scores.py [--quick] [--only NAME ...]
+    python benchmarks/bench_scores.py [--quick] [--only NAME ...] [--threads 1] [--out benchmarks/results]
 """
 
 from __future__ import annotations
@@ -195,9 +195,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer inputs per solver")
     parser.add_argument("--only", nargs="*", help="run only these solvers")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads (default: %(default)s)")
+    parser.add_argument("--out", type=Path, default=HERE / "results", help="folder of scores.md and scores.json")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    torch.set_num_threads(1)
+    torch.set_num_threads(args.threads)
     inputs = {kind: make(args.quick) for kind, make in INPUTS.items()}
     rows, skipped = [], {}
     for name in SOLVERS.names():
@@ -209,7 +211,7 @@ def main() -> None:
             continue
         rows.append(run_solver(name, entry.kind, inputs[entry.kind]))
         log.info("%s done in %.0f s", name, rows[-1]["seconds"])
-    write_report(HERE / "results", "scores", to_markdown(rows, skipped), {"rows": rows, "skipped": skipped})
+    write_report(args.out, "scores", to_markdown(rows, skipped), {"rows": rows, "skipped": skipped})
 
 
 if __name__ == "__main__":
