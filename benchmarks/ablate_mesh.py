@@ -1,5 +1,8 @@
 """Ablation of the intrinsic-symmetry solver's extensions, on shapes held out from their choice.
 
+Front door: not ``torchsym.detect``; an ablation switches settings off one at a time, which the
+shipped config does not.
+
 Every extension of ``torchsym.mesh.intrinsic`` (``docs/design/intrinsic.md``) was chosen by
 its effect on BCICP FAUST and TOSCA_Isometric. BCICP's TOSCA_nonIsometric shapes (gorillas,
 men and others, 24 with symmetric ground truth) were never used to choose anything: they are

@@ -1,5 +1,8 @@
 """The solvers on a CUDA device beside the CPU, in one run on one machine.
 
+Front door: not ``torchsym.detect``; the solvers' functions run on tensors placed on each device
+(the front door reads files into CPU tensors).
+
 Inputs are generated in code (seeded), so the script needs no data folder:
 
 * reflection plane of a point cloud (:func:`torchsym.detect_reflection_plane`) on

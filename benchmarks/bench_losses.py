@@ -1,5 +1,7 @@
 """Forward + backward time of the symmetry distance loss against a dense ``cdist`` formulation.
 
+Front door: none; it times a loss (``torchsym.losses``), not a detection pipeline.
+
 The case of the issue: 32 clouds x 1,000 points x 3 planes (float32), loss
 ``mean_i min_j |S p_i - p_j|^2`` per cloud and plane, summed, then ``backward()`` to the
 planes and the points. Rows:
@@ -24,15 +26,14 @@ Usage: python benchmarks/bench_losses.py [--threads 1] [--repeats 5] [--out benc
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 import time
-from pathlib import Path
 
 import torch
 
 from torchsym.losses import reflect_batch, symmetry_distance
+from report import write_report  # benchmarks/report.py
 
 
 def dense_loss(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor) -> torch.Tensor:
@@ -131,11 +132,7 @@ def main() -> None:
             f"{r['loss_rel_diff']:.1e} | {r['grad_rel_diff']:.1e} |"
         )
     text = "\n".join(lines) + "\n"
-    print(text)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "losses.md").write_text(text)
-    (out / "losses.json").write_text(json.dumps({"command": " ".join(sys.argv), "torch": torch.__version__, "rows": table}, indent=2))
+    write_report(args.out, "losses", text, {"command": " ".join(sys.argv), "torch": torch.__version__, "rows": table})
 
 
 if __name__ == "__main__":

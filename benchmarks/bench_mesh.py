@@ -1,5 +1,8 @@
 """Benchmark of intrinsic reflection symmetry on triangle meshes (thesis Sec. 6.3).
 
+Front door: not ``torchsym.detect``; it calls ``intrinsic_symmetry`` on meshes it remeshes, twists or
+holes in memory, and runs variants with stages off beside the defaults.
+
 Runs, in one process and on the same inputs, torchsym's ``intrinsic_symmetry`` (Ch. 6)
 and pyFM (PyPI ``pyfmaps``) as the peer: pyFM's orientation-reversing functional self-map
 (``FunctionalMapping.fit(..., w_orient=1, orient_reversing=True)``) fitted on the same

@@ -41,8 +41,9 @@ import torch
 
 from torchsym.geometry.reflection import plane_from_pairs, reflect_points
 from torchsym.metrics.multiview import align_cameras, camera_centers, plane_errors, transform_plane
-from torchsym.multiview import consensus_plane, detect_multiview_plane
+from torchsym.multiview import consensus_plane
 from torchsym.multiview.views import IMAGE_SUFFIXES
+from report import write_report  # benchmarks/report.py
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -149,9 +150,19 @@ def reference_plane(result, landmarks: dict, folder: Path) -> dict:
             "pairs": int(len(a)), "loo_angle_deg": loo}
 
 
+CONFIG = ROOT / "configs" / "multiview_plane.yaml"
+
+
 def run(paths, max_side: int, threads: int) -> tuple:
+    """The shipped path: ``torchsym.detect`` with ``configs/multiview_plane.yaml`` on the photos
+    as one scene; ``--max-side`` and ``--threads`` override the config only where they differ."""
+    import torchsym
+    from torchsym.core.config import load_config
+
+    params = load_config(CONFIG).steps[0].params["reconstruction"]
+    overrides = {f"reconstruction.{k}": v for k, v in (("max_image_side", max_side), ("n_threads", threads)) if params.get(k) != v}
     t0 = time.perf_counter()
-    r = detect_multiview_plane(paths, reconstruction={"max_image_side": max_side, "n_threads": threads})
+    r = torchsym.detect([str(p) for p in paths], CONFIG, kind="multiview", **overrides)
     return r, time.perf_counter() - t0
 
 
@@ -266,12 +277,9 @@ def main(argv=None) -> int:
         lines.append(f"| {s['pairs']} | {s['median_seconds']:.3f} | {s['angle_deg']:.3f} |")
     text = "\n".join(lines) + "\n"
     print()
-    print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "multiview.md").write_text(text)
     ref_json = {k: (v.tolist() if isinstance(v, torch.Tensor) else v) for k, v in ref.items()}
-    (args.out / "multiview.json").write_text(json.dumps({"args": {k: str(v) for k, v in vars(args).items()},
-                                                         "reference": ref_json, "rows": rows, "plane_step": step}, indent=1))
+    write_report(args.out, "multiview", text, {"args": {k: str(v) for k, v in vars(args).items()},
+                                               "reference": ref_json, "rows": rows, "plane_step": step})
     return 0
 
 

@@ -1,5 +1,8 @@
 """Benchmark of PointSymm, reflection symmetry of d-dimensional point sets (thesis Ch. 7).
 
+Front door: not ``torchsym.detect``; it calls ``point_symm`` on point sets made in memory and runs
+variants (no scan, hard assignment, started from the truth) beside the defaults.
+
 Measures, on the seeded synthetic sets of :func:`torchsym.pointset.make_symmetric_pointset`
 (Sec. 7.4.2: ``n/2`` uniform points in the unit cube and their mirrors, then Gaussian noise
 of variance ``sigma^2``):

@@ -19,13 +19,12 @@ above an asymmetric one, ties counting half). Solvers without a scalar score, an
 ``multiview_plane`` (minutes per scene), are listed without figures, with the reason.
 Writes ``benchmarks/results/scores.md`` and ``scores.json``.
 
-    python benchmarks/bench_scores.py [--quick] [--only NAME ...]
+    python benchmarks/bench_scores.py [--quick] [--only NAME ...] [--threads 1] [--out benchmarks/results]
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import statistics
 import time
@@ -39,6 +38,7 @@ from torchsym.core.registry import SOLVERS
 from torchsym.image.synthetic import mirrored_objects_image, mirrored_texture_image
 from torchsym.pointcloud.synthetic import mirror_complete, sample_surface
 from torchsym.pointset import make_symmetric_pointset
+from report import write_report  # benchmarks/report.py
 
 HERE = Path(__file__).resolve().parent
 MESHES = HERE.parent.parent / "shared" / "data" / "meshes"
@@ -195,9 +195,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer inputs per solver")
     parser.add_argument("--only", nargs="*", help="run only these solvers")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads (default: %(default)s)")
+    parser.add_argument("--out", type=Path, default=HERE / "results", help="folder of scores.md and scores.json")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    torch.set_num_threads(1)
+    torch.set_num_threads(args.threads)
     inputs = {kind: make(args.quick) for kind, make in INPUTS.items()}
     rows, skipped = [], {}
     for name in SOLVERS.names():
@@ -209,12 +211,7 @@ def main() -> None:
             continue
         rows.append(run_solver(name, entry.kind, inputs[entry.kind]))
         log.info("%s done in %.0f s", name, rows[-1]["seconds"])
-    md = to_markdown(rows, skipped)
-    print(md)
-    out = HERE / "results"
-    out.mkdir(exist_ok=True)
-    (out / "scores.md").write_text(md)
-    (out / "scores.json").write_text(json.dumps({"rows": rows, "skipped": skipped}, indent=2))
+    write_report(args.out, "scores", to_markdown(rows, skipped), {"rows": rows, "skipped": skipped})
 
 
 if __name__ == "__main__":

@@ -1,5 +1,8 @@
 """Symmetric-object segmentation against ground-truth masks (thesis Secs. 4.3.1 and 3.3.3).
 
+Front door: not ``torchsym.detect``; ``symm_slic`` and ``symmetry_map`` run with the settings of
+``configs/image_symmslic.yaml`` and ``configs/image_symmetry_map.yaml`` (the map with ``n_axes: 1``, one object per mask).
+
 Data (fetched, never committed): the GrabCut and Berkeley interactive-segmentation sets
 of ``SamsungLabs/ritm_interactive_segmentation`` at commit ``c05f992`` (``--ritm``, the
 folder holding ``GrabCut/{data_GT, boundary_GT}`` and ``Berkeley/masks``); the Berkeley

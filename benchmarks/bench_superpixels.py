@@ -1,5 +1,8 @@
 """SymmSLIC against the superpixel methods people use (thesis Sec. 4.3).
 
+Front door: not ``torchsym.detect``; SymmSLIC runs at the peers' superpixel counts and with given
+axes, settings the shipped config fixes.
+
 In one run, on the same images:
 
 * BSDS500 test images (fetched, never committed; ``--bsds DIR`` is the folder holding

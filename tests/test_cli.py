@@ -33,12 +33,12 @@ class TestCLI:
     def test_bad_input(self, tmp_path, capsys):
         bad = tmp_path / "x.ply"
         bad.write_text("nonsense")
-        assert main(["detect", str(bad), "--out", str(tmp_path)]) == 2
+        assert main(["detect", str(bad), "--out", str(tmp_path)]) == 1  # the input failed
         assert "cannot read" in capsys.readouterr().err
 
     def test_unknown_setting(self, tmp_path, capsys):
         code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_strats=2"])
-        assert code == 2 and "did you mean 'n_starts'" in capsys.readouterr().err
+        assert code == 1 and "did you mean 'n_starts'" in capsys.readouterr().err
 
     def test_out_that_cannot_be_created(self, tmp_path, capsys):
         blocker = tmp_path / "file.txt"
@@ -58,7 +58,7 @@ class TestCLI:
         before = (tmp_path / "chair_plane.ply").read_bytes()
         code = main(["detect", str(tmp_path), "--out", str(tmp_path), "-q"])
         err = capsys.readouterr().err
-        assert code == 2 and "would overwrite the input" in err and "chair_plane.ply" in err
+        assert code == 1 and "would overwrite the input" in err and "chair_plane.ply" in err
         assert (tmp_path / "chair_plane.ply").read_bytes() == before
         assert not (tmp_path / "chair.json").exists()  # nothing of the refused input was written
         assert (tmp_path / "chair_plane.json").is_file() and (tmp_path / "chair_plane_plane.ply").is_file()
@@ -86,10 +86,10 @@ class TestCLI:
     def test_unique_stems(self):
         from pathlib import Path
 
-        from torchsym.cli import _unique_stems
+        from torchsym.io.inputs import unique_stems
 
         names = ["a/chair.xyz", "a/chair.npy", "b/chair.xyz", "a/chair_xyz.txt", "a/chair_xyz_2.pts", "a/table.ply"]
-        stems = _unique_stems([Path(n) for n in names])
+        stems = unique_stems([Path(n) for n in names])
         assert len(set(stems)) == len(stems) and stems[-1] == "table" and stems[3:5] == ["chair_xyz", "chair_xyz_2"]
 
 
@@ -116,7 +116,7 @@ class TestCLIFiles:
         before = cfg.read_bytes()
         code = main(["detect", str(scan), "--config", str(cfg), "--out", str(tmp_path), "-q", "--no-figures"])
         line = _one_error_line(capsys.readouterr().err)
-        assert code == 2 and "would overwrite the input" in line and "scan.json" in line
+        assert code == 1 and "would overwrite the input" in line and "scan.json" in line
         assert cfg.read_bytes() == before
 
     def test_second_run_over_its_own_outputs(self, tmp_path, capsys):
@@ -138,7 +138,7 @@ class TestCLIFiles:
 
     def test_empty_input_refused(self, capsys):
         assert main(["detect", "", "-q"]) == 2
-        assert "INPUT: expected a file or folder" in _one_error_line(capsys.readouterr().err)
+        assert "inputs: expected a file, folder or glob pattern" in _one_error_line(capsys.readouterr().err)
 
     @pytest.mark.parametrize("value", [
         "!!python/object/apply:os.system [echo hi]",  # ConstructorError
@@ -166,7 +166,7 @@ class TestCLIFiles:
         d.mkdir()
         (d / "a_empty.npy").write_bytes(b"")
         _small_cloud(d / "b.xyz")
-        assert main(["detect", str(d), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 2
+        assert main(["detect", str(d), "--out", str(tmp_path / "o"), "-q", "--no-figures"]) == 1
         err = capsys.readouterr().err
         assert "a_empty.npy" in err and "cannot read" in err and "1 of 2 inputs failed" in err
         assert json.loads((tmp_path / "o" / "b.json").read_text())["result"]["type"] == "ReflectionPlaneResult"
@@ -178,3 +178,74 @@ class TestCLIFiles:
         assert out.returncode == 2
         _one_error_line(out.stderr)
         assert not [q for q in tmp_path.iterdir() if q.name != "torchsym-out"]
+
+
+class TestInputsAsUsersHaveThem:
+    def test_cad_mesh_gets_its_plane_with_no_flags(self, tmp_path, capsys):
+        import math
+
+        import torch
+        from cad_models import cad_chair, write_obj
+
+        from torchsym.geometry import plane_angle
+
+        mesh, normal, _ = cad_chair()
+        path = write_obj(tmp_path / "model.obj", mesh)
+        assert main(["detect", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+        err = capsys.readouterr().err
+        assert "the intrinsic (mesh) pipeline cannot take this mesh" in err and "non-manifold" in err
+        record = json.loads((tmp_path / "o" / "model.json").read_text())
+        assert record["result"]["type"] == "ReflectionPlaneResult" and record["config"]["surface"]["points"] == 20000
+        angle = float(plane_angle(torch.tensor(record["result"]["normal"], dtype=torch.float64), normal)) * 180 / math.pi
+        assert angle < 1.0
+        # --kind still forces either: the intrinsic pipeline refuses the non-manifold edge
+        assert main(["detect", str(path), "--out", str(tmp_path / "m"), "-q", "--kind", "mesh"]) == 1
+        assert "non-manifold edges" in capsys.readouterr().err
+
+    def test_surface_not_vertices(self, tmp_path):
+        # a mesh given to a point pipeline is sampled on its surface, area-weighted, seeded
+        from cad_models import cad_chair
+
+        from torchsym.api import prepare
+
+        mesh, _, _ = cad_chair()
+        cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "pointcloud_plane.yaml"
+        a = prepare(mesh, cfg, overrides={"surface.points": 3000})
+        assert a.kind == "pointcloud" and a.data.shape == (3000, 3) and "sampled 3000 points" in a.notes[0]
+        assert torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000}).data)
+        assert not torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000, "surface.seed": 1}).data)
+
+    def test_multiview_folder_reproduces_the_function(self, tmp_path, capsys):
+        from test_contract import _scene_folder
+
+        from torchsym.multiview import detect_multiview_plane
+
+        cfg = torchsym.data.sample_path("chair.ply").parents[2] / "configs" / "multiview_plane.yaml"
+        scenes = tmp_path / "scenes"
+        _scene_folder(scenes / "a", seed=2)
+        _scene_folder(scenes / "b", seed=3)
+        expected = {name: detect_multiview_plane(scenes / name) for name in ("a", "b")}
+        # torchsym detect FOLDER: one input, K.txt skipped with a note
+        for _ in range(2):  # a second run replaces the first's outputs (the COLMAP model is a folder)
+            assert main(["detect", str(scenes / "a"), "--config", str(cfg), "--out", str(tmp_path / "o"), "-q"]) == 0
+            assert "K.txt" in capsys.readouterr().err
+        assert (tmp_path / "o" / "a_colmap").is_dir() and not list((tmp_path / "o").glob(".torchsym-staging-*"))
+        record = json.loads((tmp_path / "o" / "a.json").read_text())
+        assert record["result"]["normal"] == expected["a"].normal.tolist()
+        # the API with a list of paths and kind="multiview"
+        photos = sorted(str(p) for p in (scenes / "a").glob("*.png"))
+        assert torchsym.detect(photos, kind="multiview").normal.tolist() == expected["a"].normal.tolist()
+        assert torchsym.detect(scenes / "a").normal.tolist() == expected["a"].normal.tolist()  # a folder: one scene
+        # torchsym run over a folder of scenes: one record per scene
+        out = tmp_path / "r.jsonl"
+        assert main(["run", str(cfg), "--inputs", str(scenes), "--out", str(out), "--engine", "serial", "-q"]) == 0
+        records = {Path(r["input"]).name: r for r in torchsym.read_results(out)}
+        assert sorted(records) == ["a", "b"]
+        for name in ("a", "b"):
+            assert records[name]["result"]["normal"] == expected[name].normal.tolist()
+
+
+def torch_equal(a, b) -> bool:
+    import torch
+
+    return bool(torch.equal(a, b))

@@ -12,6 +12,7 @@ import inspect
 import json
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -180,3 +181,89 @@ class TestSolverContract:
     def test_bad_input_is_typed(self, entry):
         with pytest.raises(TorchsymError):
             entry.cls()(_BAD[entry.kind])
+
+
+# --- the front door: every shipped config through torchsym.detect, the CLI and torchsym run ---
+
+CONFIGS = sorted((Path(torchsym.__file__).parents[1] / "configs").glob("*.yaml"))
+
+
+def _scene_folder(folder: Path, seed: int = 2) -> Path:
+    """Five photos of the synthetic symmetric scene as PNG files, and a ``K.txt`` beside
+    them (not a photo: skipped with a note)."""
+    import cv2
+
+    from torchsym.multiview.synthetic import symmetric_scene
+
+    folder.mkdir(parents=True)
+    scene = symmetric_scene(5, height=240, width=320, generator=torch.Generator().manual_seed(seed))
+    for i, img in enumerate(scene.images):
+        rgb = (img.permute(1, 2, 0).numpy() * 255).round().astype(np.uint8)
+        cv2.imwrite(str(folder / f"view_{i}.png"), rgb[:, :, ::-1])
+    np.savetxt(folder / "K.txt", scene.intrinsics.numpy())
+    return folder
+
+
+def _input_file(kind: str, folder: Path) -> Path:
+    """A small input of ``kind`` as users have it: a file, or a folder of photos."""
+    from cad_models import cad_chair, write_obj
+
+    from torchsym.io import write_image, write_mesh
+
+    if kind == "pointcloud":  # a CAD model: several parts, a non-manifold edge
+        return write_obj(folder / "chair.obj", cad_chair()[0])
+    if kind == "points":
+        path = folder / "pointset.npy"
+        np.save(path, _input("points").numpy())
+        return path
+    if kind == "image":
+        return write_image(folder / "photo.png", _image())
+    if kind == "mesh":
+        return write_mesh(folder / "bumps.off", _mesh())
+    if kind == "multiview":
+        return _scene_folder(folder / "scene")
+    raise AssertionError(kind)
+
+
+#: settings that only shrink the input (the CAD model's surface sample), never the method
+SHRINK = {"pointcloud": ["surface.points=4000"], "points": []}
+
+
+def _result(d):
+    return json.dumps(_without_timings(d), sort_keys=True)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", CONFIGS, ids=lambda p: p.stem)
+def test_config_runs_through_every_front_door(config, tmp_path):
+    from torchsym.cli import main
+    from torchsym.core.config import load_config, parse_overrides
+
+    kind = load_config(config).input
+    path = _input_file(kind, tmp_path)
+    sets = SHRINK.get(kind, [])
+    try:
+        api = torchsym.detect(path, config, **parse_overrides(sets))
+    except AttributeError as exc:  # an OpenCV build without the contrib modules shadows opencv-contrib
+        if "createEdgeDrawing" not in str(exc):
+            raise
+        pytest.skip(f"this OpenCV lacks the contrib module EdgeDrawing ({exc})")
+    # the CLI: <stem>.json and a picture
+    out = tmp_path / "cli"
+    assert main(["detect", str(path), "--config", str(config), "--out", str(out), "-q", *[a for s in sets for a in ("--set", s)]]) == 0
+    record = json.loads((out / f"{Path(path).stem}.json").read_text())
+    assert record["result"]["type"] == type(api).__name__ and record["artifacts"]
+    assert all(Path(a).exists() for a in record["artifacts"])
+    # torchsym run: a results file and the pictures
+    run_out = tmp_path / "run.jsonl"
+    summary = torchsym.run(config, [str(path)], run_out, engine="serial", overrides=parse_overrides(sets),
+                           figures=tmp_path / "figs", max_inline=None)
+    assert (summary.n_inputs, summary.n_ok) == (1, 1)
+    (rec,) = torchsym.read_results(run_out)
+    assert rec["artifacts"] and all(Path(a).exists() for a in rec["artifacts"])
+    # one path: the same result from each door
+    assert _result(record["result"]) == _result(api.to_dict()) == _result(rec["result"])
+    if kind == "multiview":
+        assert any("K.txt" in n for n in record["notes"])
+    if kind == "pointcloud":
+        assert any("sampled 4000 points" in n for n in record["notes"])

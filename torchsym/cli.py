@@ -8,63 +8,27 @@
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import sys
-import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn, Sequence
+from typing import Any, NoReturn
 
-import yaml
+from torchsym.core.registry import USER_KINDS
 
-__all__ = ["main"]
+__all__ = ["detect_files", "main"]
 
 _INPUTS_HELP = (
     "point clouds (.ply .obj .off .stl .xyz .txt .pts .npy), meshes (.off .obj .ply .stl with "
-    "triangles), images (.png .jpg ...), or folders of them"
+    "triangles), images (.png .jpg ...), folders or glob patterns of them; for a multiview config, "
+    "a folder of photos (or the photos) is one scene and a folder of folders one scene per folder"
 )
 
 
-#: the file in an output folder listing what torchsym wrote there; a folder given as input
-#: skips the files it names, so a second run over its own output folder reads the same inputs
-MANIFEST = ".torchsym-outputs.json"
-
-
 def _fail(message: str) -> None:
-    """Print ``torchsym: error: message`` as one line on stderr."""
+    """Print ``torchsym: error: message`` as one line on stderr: the one error format of
+    every sub-command."""
     print("torchsym: error: " + " ".join(str(message).splitlines()), file=sys.stderr)
-
-
-def _yaml_value(key: str, text: str) -> Any:
-    """``text`` read as one plain YAML value: no anchors or aliases, nesting at most 8 deep."""
-    from torchsym.errors import ConfigError
-
-    where = f"--set: {key}={text!r}"
-    try:
-        depth = 0
-        for event in yaml.parse(text, Loader=yaml.SafeLoader):
-            if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
-                raise ConfigError(f"{where}: expected a plain value, got a YAML anchor or alias")
-            depth += isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent))
-            depth -= isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent))
-            if depth > 8:
-                raise ConfigError(f"{where}: expected a value nested at most 8 deep")
-        return yaml.safe_load(text)
-    except (yaml.YAMLError, RecursionError) as exc:
-        problem = " ".join(str(exc).split()) or type(exc).__name__
-        raise ConfigError(f"{where} is not a valid YAML value ({problem})") from None
-
-
-def _parse_set(items: Sequence[str]) -> dict[str, Any]:
-    from torchsym.errors import ConfigError
-
-    out: dict[str, Any] = {}
-    for item in items:
-        key, eq, value = item.partition("=")
-        if not eq or not key.strip():
-            raise ConfigError(f"--set: expected KEY=VALUE, got {item!r}")
-        out[key.strip()] = _yaml_value(key.strip(), value)
-    return out
 
 
 def _resolve(p: Path) -> Path:
@@ -75,65 +39,9 @@ def _resolve(p: Path) -> Path:
         return p.absolute()
 
 
-def _own_outputs(folder: Path) -> set[str]:
-    """Names that earlier runs wrote into ``folder`` (its manifest; none if unreadable)."""
-    try:
-        names = json.loads((folder / MANIFEST).read_text()).get("outputs", [])
-    except (OSError, ValueError, AttributeError):
-        return set()
-    return {n for n in names if isinstance(n, str)}
-
-
-def _expand(inputs: Sequence[str]) -> list[Path]:
-    """Files of ``inputs``: files as given, folders' files with a known suffix, except
-    hidden files and the outputs a torchsym run wrote there (:data:`MANIFEST`)."""
-    from torchsym.errors import InputFileError
-    from torchsym.io.read import IMAGE_SUFFIXES, POINT_SUFFIXES
-
-    paths: list[Path] = []
-    for item in inputs:
-        if not item.strip():
-            raise InputFileError("INPUT: expected a file or folder, got ''")
-        p = Path(item)
-        if not p.is_dir():
-            paths.append(p)
-            continue
-        skip = _own_outputs(p)
-        try:
-            found = sorted(q for q in p.iterdir() if q.suffix.lower() in IMAGE_SUFFIXES + POINT_SUFFIXES
-                           and not q.name.startswith(".") and q.name not in skip)
-        except OSError as exc:
-            raise InputFileError(f"INPUT: cannot list the folder '{p}' ({exc.strerror or exc})") from None
-        paths += found
-    return paths
-
-
-def _unique_stems(paths: Sequence[Path]) -> list[str]:
-    """Output names for ``paths``: the file's stem, with its suffix added where two inputs
-    share a stem (``chair.png``, ``chair.xyz`` -> ``chair_png``, ``chair_xyz``) and a count
-    where they still clash (the same name in two folders)."""
-    from collections import Counter
-
-    counts = Counter(p.stem for p in paths)
-    taken = {p.stem for p in paths if counts[p.stem] == 1}
-    out = []
-    for p in paths:
-        if counts[p.stem] == 1:
-            out.append(p.stem)
-            continue
-        base = f"{p.stem}_{p.suffix.lstrip('.').lower()}"
-        stem, k = base, 1
-        while stem in taken:
-            k += 1
-            stem = f"{base}_{k}"
-        taken.add(stem)
-        out.append(stem)
-    return out
-
-
-def _summary(result: Any) -> str:
-    d = result.to_dict()
-    keys = [k for k in ("normal", "offset", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
+def _summary(d: dict[str, Any]) -> str:
+    """One line of a result's ``to_dict()``."""
+    keys = [k for k in ("normal", "offset", "found", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
     parts = []
     for k in keys:
         v = d[k]
@@ -148,176 +56,159 @@ def _summary(result: Any) -> str:
 
 
 def _out_dir(text: str) -> Path:
-    """The ``--out`` folder; an empty name (which would mean the current folder) is refused."""
+    """The ``--out`` folder, created; an empty name (which would mean the current folder) is refused."""
     from torchsym.errors import InputFileError
 
     if not text.strip():
         raise InputFileError(f"--out: expected a folder, got {text!r}")
-    return Path(text)
-
-
-def _make_out(out: Path) -> None:
-    from torchsym.errors import InputFileError
-
+    out = Path(text)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputFileError(f"--out: cannot create the folder '{out}' ({exc.strerror or exc})") from None
+    return out
 
 
-def _write_outputs(
-    result: Any,
-    data: Any,
-    record: dict[str, Any],
+def _place(record: dict[str, Any], staging: Path, out: Path, stem: str, protected: frozenset[Path], written: set[Path]) -> list[str]:
+    """Write ``<stem>.json`` beside the pictures the task wrote into ``staging`` and move
+    them into ``out``; return the paths written.
+
+    A file that would replace one of this run's inputs (``protected``; e.g. an input named
+    ``chair_plane.ply`` beside ``chair.ply`` with ``--out`` on their folder) or a file this
+    run already wrote (``written``, updated here) is refused with :class:`InputFileError`
+    before anything of this input is moved.
+    """
+    import shutil
+
+    from torchsym.errors import InputFileError
+    from torchsym.io.inputs import MANIFEST, own_outputs
+    from torchsym.io.write import write_json
+
+    names = [Path(q).name for q in record.get("artifacts") or []]
+    record["artifacts"] = [str(out / name) for name in names]
+    try:
+        write_json(record, staging / f"{stem}.json")
+        names.insert(0, f"{stem}.json")
+        for name in (n for n in names if (out / n).resolve() in protected):
+            raise InputFileError(
+                f"--out: writing the results of '{stem}' into '{out}' would overwrite the input '{out / name}'; choose another --out"
+            )
+        for name in (n for n in names if (out / n).resolve() in written):
+            raise InputFileError(
+                f"--out: writing the results of '{stem}' into '{out}' would overwrite '{out / name}', written earlier in this run"
+            )
+        for name in names:
+            if (out / name).is_dir():  # a folder an earlier run wrote (a scene's COLMAP model)
+                shutil.rmtree(out / name)
+            (staging / name).replace(out / name)
+            written.add((out / name).resolve())
+        write_json({"outputs": sorted(own_outputs(out) | set(names))}, out / MANIFEST)
+    except OSError as exc:
+        raise InputFileError(f"--out: cannot write the results of '{stem}' into '{out}' ({exc.strerror or exc})") from None
+    finally:  # what was not moved (a refused input's files) goes
+        for q in staging.iterdir():
+            shutil.rmtree(q) if q.is_dir() else q.unlink()
+    return [str(out / name) for name in names]
+
+
+def _error_line(source: str, error: dict[str, Any]) -> str:
+    """A failed input's line: its :class:`TorchsymError` message, or an internal error."""
+    import torchsym.errors
+
+    cls = getattr(torchsym.errors, str(error.get("type")), None)
+    if isinstance(cls, type) and issubclass(cls, torchsym.errors.TorchsymError):
+        return error["message"] if source in error["message"] else f"{source}: {error['message']}"
+    return f"{source}: internal error {error.get('type')}: {error.get('message')} (at {error.get('where')})"
+
+
+def detect_files(
+    inputs: Sequence[str],
     out: Path,
-    stem: str,
-    figures: bool,
-    protected: frozenset[Path],
-    written: set[Path],
-) -> list[str]:
-    """Write ``<stem>.json`` and the result's pictures into ``out``; return the paths written.
+    *,
+    config: str | None = None,
+    kind: str | None = None,
+    overrides: dict[str, Any] | None = None,
+    figures: bool = True,
+    quiet: bool = False,
+) -> tuple[int, list[dict[str, Any]]]:
+    """Run each input of ``inputs`` and write ``<stem>.json`` and its pictures into ``out``:
+    the serial case of ``torchsym run``, with the same input expansion
+    (:func:`torchsym.io.inputs.expand_inputs`) and the same task
+    (:func:`torchsym.runner.task.run_task` on the serial engine). A failing input is
+    reported on one line and the run goes on.
 
-    Everything is written into a fresh folder inside ``out`` first and then moved into
-    place, so a file that would replace one of this run's inputs (``protected``; e.g. an
-    input named ``chair_plane.ply`` beside ``chair.ply`` with ``--out`` on their folder)
-    or a file this run already wrote (``written``, updated here) is refused with
-    :class:`InputFileError` before anything is overwritten.
+    Returns:
+        ``(failures, records)``: the number of inputs that failed and the records written.
     """
     import shutil
     import tempfile
 
-    from torchsym.errors import InputFileError, TorchsymError
-    from torchsym.io.write import write_json
+    from tqdm import tqdm
 
-    _make_out(out)
+    from torchsym.core.config import load_config
+    from torchsym.errors import InputFileError
+    from torchsym.io.inputs import expand_inputs
+    from torchsym.runner.engine import serial_outcomes
+    from torchsym.runner.task import TaskSpec
+
+    overrides = dict(overrides or {})
+    cfg = load_config(config).with_overrides(overrides) if config else None
+    sources = expand_inputs(list(inputs), kind or (cfg.input if cfg is not None else None))
+    # never written: the inputs and the config file
+    protected = frozenset([_resolve(Path(f)) for s in sources for f in s.files] + ([_resolve(Path(config))] if config else []))
     try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{stem}-", dir=out))
+        staging = Path(tempfile.mkdtemp(prefix=".torchsym-staging-", dir=out))
     except OSError as exc:
         raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
+    specs = [
+        TaskSpec(i, s.name, cfg.to_dict() if cfg is not None else None, 2, str(staging) if figures else None, s.stem,
+                 max_inline=None, files=s.files, kind=kind, overrides={} if cfg is not None else overrides, notes=s.notes)
+        for i, s in enumerate(sources)
+    ]
+    written: set[Path] = set()
+    records: list[dict[str, Any]] = []
+    failures = 0
     try:
-        from torchsym.viz import write_artifacts
-
-        names = [Path(q).name for q in write_artifacts(result, data, staging, stem)] if figures else []
-        record["artifacts"] = [str(out / name) for name in names]
-        write_json(record, staging / f"{stem}.json")
-        names.insert(0, f"{stem}.json")
-        clash = [name for name in names if (out / name).resolve() in protected]
-        if clash:
-            raise InputFileError(
-                f"--out: writing the results of '{stem}' into '{out}' would overwrite the input "
-                f"'{out / clash[0]}'; choose another --out"
-            )
-        clash = [name for name in names if (out / name).resolve() in written]
-        if clash:
-            raise InputFileError(
-                f"--out: writing the results of '{stem}' into '{out}' would overwrite '{out / clash[0]}', "
-                "written earlier in this run"
-            )
-        for name in names:
-            (staging / name).replace(out / name)
-            written.add((out / name).resolve())
-        _record_outputs(out, names)
-    except TorchsymError:
-        raise
-    except OSError as exc:
-        raise InputFileError(f"--out: cannot write the results of '{stem}' into '{out}' ({exc.strerror or exc})") from None
+        with tqdm(total=len(specs), unit="input", disable=True if quiet else None, file=sys.stderr, leave=False) as bar:
+            for spec, outcome, _ in serial_outcomes(specs, threads=2):
+                bar.clear()
+                source = sources[spec.index]
+                for note in outcome.get("notes") or []:
+                    print(f"torchsym: note: {source.name}: {note}", file=sys.stderr)
+                bar.update(1)
+                if outcome["status"] != "ok":
+                    failures += 1
+                    _fail(_error_line(source.name, outcome["error"]))
+                    continue
+                record = {"input": source.name, "files": list(source.files), "kind": outcome["kind"],
+                          "config": outcome["config"], "seconds": outcome["seconds"], "notes": outcome["notes"],
+                          "result": outcome["result"], "artifacts": outcome["artifacts"]}
+                try:
+                    paths = _place(record, staging, out, spec.stem, protected, written)
+                except InputFileError as exc:
+                    failures += 1
+                    _fail(f"{source.name}: {exc}")
+                    continue
+                records.append(record)
+                print(f"{spec.stem}: {_summary(outcome['result'])} ({outcome['seconds']:.3f} s)")
+                for w in paths:
+                    print(f"  wrote {w}")
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    return [str(out / name) for name in names]
-
-
-def _record_outputs(out: Path, names: Sequence[str]) -> None:
-    """Add ``names`` to the manifest of ``out`` (see :data:`MANIFEST`)."""
-    from torchsym.io.write import write_json
-
-    write_json({"outputs": sorted(_own_outputs(out) | set(names))}, out / MANIFEST)
-
-
-def _run_one(
-    path: Path | Any,
-    stem: str,
-    args: argparse.Namespace,
-    overrides: dict[str, Any],
-    bar: Any = None,
-    protected: frozenset[Path] = frozenset(),
-    written: set[Path] | None = None,
-) -> dict[str, Any]:
-    """Read, solve, write one input; ``bar`` (a tqdm bar, optional) advances one step per stage.
-    No file in ``protected`` (the run's inputs, resolved) or in ``written`` (the files the
-    run wrote before) is ever written."""
-    from torchsym.api import prepare
-    from torchsym.core.config import build_pipeline
-
-    def stage(name: str) -> None:
-        if bar is not None:
-            bar.set_description_str(f"{stem}: {name}")
-
-    stage("reading")
-    kind, data, cfg = prepare(path, args.config, kind=args.kind)
-    pipeline = build_pipeline(cfg, **overrides)
-    if bar is not None:
-        bar.update(1)
-    stage(f"solving ({kind})")
-    t0 = time.perf_counter()
-    result = pipeline(data)
-    seconds = time.perf_counter() - t0
-    if bar is not None:
-        bar.update(1)
-    stage("writing")
-    record = {"input": str(path) if isinstance(path, Path) else stem, "kind": kind, "config": pipeline.config.to_dict(),
-              "seconds": seconds, "result": result.to_dict()}
-    paths_out: list[str] = []
-    if args.out is not None:
-        paths_out = _write_outputs(
-            result, data, record, _out_dir(args.out), stem, not args.no_figures, protected, set() if written is None else written
-        )
-    if bar is not None:
-        bar.update(1)
-        bar.clear()
-    print(f"{stem}: {_summary(result)} ({seconds:.3f} s)")
-    for w in paths_out:
-        print(f"  wrote {w}")
-    return record
+    if failures and len(specs) > 1:
+        _fail(f"{failures} of {len(specs)} inputs failed")
+    return failures, records
 
 
 def _cmd_detect(args: argparse.Namespace) -> int:
-    """Run every input; a failing input is reported on one line and the run goes on.
-    Exit code 0 when all succeed, 2 when any failed."""
-    from tqdm import tqdm
+    """Exit code 0 when every input succeeds, 1 when some failed (as ``torchsym run``)."""
+    from torchsym.core.config import parse_overrides
 
-    from torchsym.errors import TorchsymError
-
-    overrides = _parse_set(args.set or [])
-    _make_out(_out_dir(args.out))
-    paths = _expand(args.inputs)
-    if not paths:
-        _fail("detect: no inputs found (folders are searched for " + _INPUTS_HELP.split(", or")[0] + ")")
-        return 2
-    # never written: the inputs and the config file
-    protected = frozenset([_resolve(p) for p in paths] + ([_resolve(Path(args.config))] if args.config else []))
-    stems = _unique_stems(paths)
-    written: set[Path] = set()
-    failures = 0
-    # three steps per input (read, solve, write), so a single input shows its stages too
-    with tqdm(total=3 * len(paths), unit="step", disable=True if args.quiet else None, file=sys.stderr, leave=False) as bar:
-        for p, stem in zip(paths, stems):
-            done = bar.n
-            try:
-                _run_one(p, stem, args, overrides, bar, protected, written)
-            except TorchsymError as exc:
-                failures += 1
-                bar.clear()
-                _fail(f"{p}: {exc}")
-            except Exception as exc:  # noqa: BLE001 -- a folder run goes on past a bug in one input
-                if args.verbose:
-                    raise
-                failures += 1
-                bar.clear()
-                _fail(f"{p}: internal error {type(exc).__name__}: {exc} (rerun with -v for the traceback)")
-            bar.update(done + 3 - bar.n)
-    if failures and len(paths) > 1:
-        _fail(f"{failures} of {len(paths)} inputs failed")
-    return 2 if failures else 0
+    failures, _ = detect_files(
+        args.inputs, _out_dir(args.out), config=args.config, kind=args.kind, overrides=parse_overrides(args.set or []),
+        figures=not args.no_figures, quiet=args.quiet,
+    )
+    return 1 if failures else 0
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -328,11 +219,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     path = data.sample_path("chair.ply")
     print(f"torchsym demo: reflection plane of the embedded sample {path.name} (4,000 points, known plane)")
-    from tqdm import tqdm
-
-    args.config, args.kind, args.no_figures = None, None, False
-    with tqdm(total=3, unit="step", file=sys.stderr, leave=False) as bar:
-        record = _run_one(path, "chair", args, {}, bar, frozenset([path.resolve()]))
+    failures, records = detect_files([str(path)], _out_dir(args.out), quiet=True)
+    if failures:
+        return 1
+    record = records[0]
     n_true, b_true = data.sample_plane()
     import torch
 
@@ -370,15 +260,17 @@ def _parser() -> argparse.ArgumentParser:
         help="detect the reflection symmetry of inputs and write JSON and pictures",
         description=(
             "Detect reflection symmetry. The pipeline is chosen from each input's kind "
-            "(point cloud: reflection plane; mesh: intrinsic symmetry map; image: symmetry axes) "
-            "unless --config names a YAML pipeline (see configs/)."
+            "(point cloud: reflection plane; mesh: intrinsic symmetry map, or the reflection plane of its surface "
+            "when it is not one manifold piece; image: symmetry axes) unless --config names a YAML pipeline "
+            "(see configs/). The serial case of `torchsym run`: exit code 0 when every input succeeds, 1 when "
+            "some failed, 2 for bad arguments."
         ),
     )
     d.add_argument("inputs", nargs="+", metavar="INPUT", help=_INPUTS_HELP)
     d.add_argument("--config", help="YAML pipeline file (input kind, steps with solver names and params)")
     d.add_argument("--out", default="torchsym-out", help="folder for <name>.json and the pictures (default: %(default)s)")
     d.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting of the last solver (repeatable)")
-    d.add_argument("--kind", choices=["pointcloud", "points", "image", "mesh"], help="treat inputs as this kind (e.g. a mesh's vertices as a point cloud)")
+    d.add_argument("--kind", choices=USER_KINDS, help="treat inputs as this kind (e.g. pointcloud: a mesh sampled on its surface; mesh: the intrinsic pipeline)")
     d.add_argument("--no-figures", action="store_true", help="write JSON only")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=_cmd_detect)

@@ -108,3 +108,47 @@ class TestRegistry:
     def test_solvers_importable_from_top_level(self):
         for entry in torchsym.SOLVERS:
             assert getattr(torchsym, entry.cls.__name__) is entry.cls
+
+
+class TestSurfaceSampling:
+    def test_default_and_yaml(self):
+        cfg = load_config({"input": "pointcloud", "steps": ["reflection_plane"], "surface": {"points": 5000, "seed": 3}})
+        assert (cfg.surface.points, cfg.surface.seed) == (5000, 3)
+        assert cfg.to_dict()["surface"] == {"points": 5000, "seed": 3}
+        assert load_config({"input": "pointcloud", "steps": ["reflection_plane"]}).surface.points == 20000
+        assert "surface" not in load_config({"input": "image", "steps": ["ksymmetry"]}).to_dict()
+
+    def test_override(self):
+        cfg = load_config({"input": "pointcloud", "steps": ["reflection_plane"]})
+        new = cfg.with_overrides({"surface.points": 100, "n_starts": 2})
+        assert new.surface.points == 100 and new.steps[0].params["n_starts"] == 2 and cfg.surface.points == 20000
+
+    @pytest.mark.parametrize("surface, message", [
+        ({"points": 0}, r"surface.points: expected an integer in \[4, 20000000\], got 0"),
+        ({"points": True}, "surface.points: expected an integer"),
+        ({"pionts": 5}, "unknown key 'pionts' \\(did you mean 'points'\\?\\); valid keys: points, seed"),
+        ([1], "'surface' must be a mapping"),
+    ])
+    def test_exception(self, surface, message):
+        with pytest.raises(ConfigError, match=message):
+            load_config({"input": "pointcloud", "steps": ["reflection_plane"], "surface": surface})
+
+
+class TestParseOverrides:
+    def test_values(self):
+        from torchsym.core.config import parse_overrides
+
+        assert parse_overrides(["a=1", "b.c=[1, 2]", " d = x=y"]) == {"a": 1, "b.c": [1, 2], "d": "x=y"}
+
+    @pytest.mark.parametrize("item, message", [
+        ("novalue", "--set: expected KEY=VALUE, got 'novalue'"),
+        ("=3", "--set: expected KEY=VALUE"),
+        ("a=&x [1, *x]", "a YAML anchor or alias"),
+        ("a=" + "[" * 9 + "1" + "]" * 9, "nested at most 8 deep"),
+        ("a=!!python/object/apply:os.system [echo]", "--set: a="),
+    ])
+    def test_exception(self, item, message):
+        from torchsym.core.config import parse_overrides
+
+        with pytest.raises(ConfigError, match=message.replace("[", "\\[")):
+            parse_overrides([item])

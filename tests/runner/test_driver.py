@@ -110,15 +110,17 @@ class TestBadInput:
             run(probe_config(markers), str(tmp_path / "in"), tmp_path / "r.jsonl", imports=[PROBE], max_inline=-1)
 
     def test_glob_matches_nothing(self, tmp_path, markers):
-        with pytest.raises(InputFileError, match=r"--inputs: the pattern '.*nothing\*\.ply' matches no file"):
+        with pytest.raises(InputFileError, match=r"inputs: '.*nothing\*\.ply' matches no file"):
             run(probe_config(markers), [str(tmp_path / "nothing*.ply")], tmp_path / "r.jsonl", imports=[PROBE])
         assert not (tmp_path / "r.jsonl").exists()
 
     def test_config_for_another_kind(self, tmp_path):
         _clouds(tmp_path / "in", 2)
         cfg = {"input": "image", "steps": [{"name": "ksymmetry"}]}
-        with pytest.raises(ConfigError, match=r"takes 'image' input, but '.*c0\.xyz' is not an image \(2 of 2 inputs\)"):
+        with pytest.raises(InputValueError, match=r"inputs: no image input .* \(skipped 2 file\(s\) that hold no image input .*: c0.xyz, c1.xyz\)"):
             run(cfg, str(tmp_path / "in"), tmp_path / "r.jsonl")
+        with pytest.raises(ConfigError, match=r"takes 'image' input .*, but '.*c0\.xyz' is not one \(2 of 2 inputs\)"):
+            run(cfg, [str(tmp_path / "in" / "c*.xyz")], tmp_path / "r.jsonl")
 
     def test_unreachable_address(self, tmp_path, markers):
         _clouds(tmp_path / "in", 2)
@@ -150,9 +152,27 @@ class TestExpandInputs:
         (tmp_path / "in" / "notes.md").write_text("x")
         (tmp_path / "in" / "deep").mkdir()
         write_cloud(tmp_path / "in" / "deep" / "d.xyz", 9)
-        got = expand_inputs([str(tmp_path / "in"), str(files[0]), str(tmp_path / "in" / "c*.xyz")])
-        assert got == [f.resolve() for f in files]
+        got = expand_inputs([str(tmp_path / "in"), str(files[0]), str(tmp_path / "in" / "c*.xyz")], "pointcloud")
+        assert [s.files for s in got] == [(str(f),) for f in files] and [s.stem for s in got] == ["c0", "c1", "c2"]
+        assert got[0].notes == ("skipped 1 file(s) that hold no pointcloud input (.ply .obj .off .stl .xyz .npy .txt .pts): notes.md",)
         assert len(expand_inputs([str(tmp_path / "**" / "*.xyz")])) == 4
+
+    def test_scenes(self, tmp_path):
+        # multiview: a folder of photos is one scene, a folder of folders one scene per folder, loose photos one scene
+        for scene in ("a", "b"):
+            (tmp_path / "s" / scene).mkdir(parents=True)
+            for i in range(3):
+                (tmp_path / "s" / scene / f"{i}.png").write_bytes(b"")
+        (tmp_path / "s" / "a" / "K.txt").write_text("1 0 0")
+        got = expand_inputs([str(tmp_path / "s")], "multiview")
+        assert [(Path(s.name).name, len(s.files), s.stem) for s in got] == [("a", 3, "a"), ("b", 3, "b")]
+        assert got[0].notes and "K.txt" in got[0].notes[0] and not got[1].notes
+        one = expand_inputs([str(tmp_path / "s" / "a")], "multiview")
+        assert len(one) == 1 and len(one[0].files) == 3
+        loose = expand_inputs([str(tmp_path / "s" / "a" / "*")], "multiview")
+        assert len(loose) == 1 and len(loose[0].files) == 3 and "K.txt" in loose[0].notes[0]
+        with pytest.raises(InputValueError, match="inputs: no multiview input"):
+            expand_inputs([str(tmp_path / "s" / "a" / "K.txt")], "multiview")
 
 
 class TestChooseEngine:

@@ -102,8 +102,8 @@ class TestMeshes:
     def test_value(self, tmp_path):
         mirror = [r * 5 + 4 - c for r in range(5) for c in range(5)]
         results = _write(tmp_path / "r.jsonl", [
-            {"input": str(_grid_off(tmp_path / "m1.off")), "status": "ok", "result": {"map": mirror}},
-            {"input": str(_grid_off(tmp_path / "m2.off")), "status": "ok", "result": {"map": list(range(25))}},
+            {"input": str(_grid_off(tmp_path / "m1.off")), "status": "ok", "result": {"type": "IntrinsicSymmetryResult", "map": mirror}},
+            {"input": str(_grid_off(tmp_path / "m2.off")), "status": "ok", "result": {"type": "IntrinsicSymmetryResult", "map": list(range(25))}},
             {"input": str(tmp_path / "m3.off"), "status": "error", "result": None},
         ])
         corres = tmp_path / "truth" / "corres"
@@ -166,8 +166,12 @@ class TestSuperpixels:
         truth.mkdir()
         _bsds_mat(truth / "a.mat", [[[1, 2]]])
         results = _write(tmp_path / "r.jsonl", [_axes("a.jpg", [[0, 0, 1, 1]], [1.0])])
-        with pytest.raises(InputValueError, match="has no 'labels' array to score"):
+        # scored by its type: axes are no superpixels
+        with pytest.raises(InputValueError, match="is superpixels ground truth, which scores SymmSlicResult; the run's results are ReflectionAxesResult"):
             evaluate(results, truth)
+        no_labels = _write(tmp_path / "s.jsonl", [{"input": "/p/a.jpg", "status": "ok", "result": {"type": "SymmSlicResult"}}])
+        with pytest.raises(InputValueError, match="has no 'labels' array to score"):
+            evaluate(no_labels, truth)
 
 
 class TestSegmentation:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any, Mapping
 
 import yaml
@@ -27,9 +28,12 @@ from torch import nn
 from torchsym.core.registry import INPUT_KINDS, SOLVERS, SolverEntry
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 
-__all__ = ["Pipeline", "PipelineConfig", "StepConfig", "build_pipeline", "default_config", "load_config", "load_yaml"]
+__all__ = [
+    "Pipeline", "PipelineConfig", "StepConfig", "SurfaceSampling", "build_pipeline", "default_config", "load_config",
+    "load_yaml", "parse_overrides",
+]
 
-_TOP_KEYS = {"input", "steps", "description"}
+_TOP_KEYS = {"input", "steps", "description", "surface"}
 _STEP_KEYS = {"name", "params"}
 
 #: at most this many YAML aliases (``*name``) in one text: a config needs none, and a
@@ -88,6 +92,76 @@ def load_yaml(text: str, where: str) -> Any:
         loader.dispose()
 
 
+#: a ``--set`` value nests at most this deep (a setting is a number, a word or a small group)
+MAX_SET_DEPTH = 8
+
+
+def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
+    """``KEY=VALUE`` strings (``--set`` of ``torchsym detect`` and ``torchsym run``) as a
+    mapping; each value is one plain YAML value: no anchors or aliases, nested at most
+    :data:`MAX_SET_DEPTH` deep, read by :func:`load_yaml`.
+
+    Raises:
+        ConfigError: no ``=``, an empty key, or a value that is not a plain YAML value;
+            the message starts with ``--set: KEY=VALUE``.
+    """
+    out: dict[str, Any] = {}
+    for item in items:
+        key, eq, text = str(item).partition("=")
+        key = key.strip()
+        if not eq or not key:
+            raise ConfigError(f"--set: expected KEY=VALUE, got {item!r}")
+        where = f"--set: {key}={text!r}"
+        try:
+            depth = 0
+            for event in yaml.parse(text, Loader=yaml.SafeLoader):
+                if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+                    raise ConfigError(f"{where}: expected a plain value, got a YAML anchor or alias")
+                depth += isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent))
+                depth -= isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent))
+                if depth > MAX_SET_DEPTH:
+                    raise ConfigError(f"{where}: expected a value nested at most {MAX_SET_DEPTH} deep")
+        except (yaml.YAMLError, RecursionError) as exc:
+            problem = " ".join(str(exc).split()) or type(exc).__name__
+            raise ConfigError(f"{where} is not a valid YAML value ({problem})") from None
+        out[key] = load_yaml(text, where)
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class SurfaceSampling:
+    """How a mesh becomes the input of a point pipeline (``input: pointcloud`` or ``points``):
+    ``points`` samples drawn uniformly by area on its surface
+    (:func:`torchsym.geometry.sample_surface`) with a generator seeded by ``seed``.
+    20,000 points cover a CAD model's large flat faces as well as its curved parts;
+    its vertices alone do not. YAML: ``surface: {points: 20000, seed: 0}``."""
+
+    points: int = 20_000
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name, low, high in (("points", 4, MAX_SURFACE_POINTS), ("seed", 0, 2**63 - 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise ConfigError(f"surface.{name}: expected an integer in [{low}, {high}], got {value!r}")
+
+    @classmethod
+    def from_dict(cls, raw: Any, where: str) -> "SurfaceSampling":
+        if not isinstance(raw, Mapping):
+            raise ConfigError(f"{where}: 'surface' must be a mapping with keys points, seed, got {raw!r}")
+        unknown = [k for k in raw if k not in ("points", "seed")]
+        if unknown:
+            raise ConfigError(f"{where}: surface: unknown key {unknown[0]!r}{_suggest(str(unknown[0]), ['points', 'seed'])}; valid keys: points, seed")
+        try:
+            return cls(**raw)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+
+#: most points :class:`SurfaceSampling` draws (as many as the readers accept from a file)
+MAX_SURFACE_POINTS = 20_000_000
+
+
 @dataclasses.dataclass(frozen=True)
 class StepConfig:
     """One step: a registered solver name and its settings."""
@@ -104,6 +178,7 @@ class PipelineConfig:
     steps: tuple[StepConfig, ...]
     description: str = ""
     source: str = "<dict>"
+    surface: SurfaceSampling = SurfaceSampling()
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> "PipelineConfig":
         """A copy whose last step's params are updated by ``overrides`` (checked); a
@@ -111,6 +186,11 @@ class PipelineConfig:
         mapping (``refine={"max_iters": 2}``)."""
         if not overrides:
             return self
+        surface = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("surface.")}
+        if surface:
+            merged = {**dataclasses.asdict(self.surface), **surface}
+            new = dataclasses.replace(self, surface=SurfaceSampling.from_dict(merged, "overrides"))
+            return new.with_overrides({k: v for k, v in overrides.items() if not k.startswith("surface.")})
         last = self.steps[-1]
         entry = SOLVERS.get(last.name)
         base = entry.settings(last.params, where=f"{self.source}: steps[{len(self.steps) - 1}]")
@@ -122,11 +202,14 @@ class PipelineConfig:
         return dataclasses.replace(self, steps=self.steps[:-1] + (step,))
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "input": self.input,
             "description": self.description,
             "steps": [{"name": s.name, "params": dict(s.params)} for s in self.steps],
         }
+        if self.input in ("pointcloud", "points"):
+            out["surface"] = dataclasses.asdict(self.surface)
+        return out
 
 
 def _suggest(word: str, choices: list[str]) -> str:
@@ -195,7 +278,8 @@ def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
         if i > 0 and entry.kind != "any":
             raise ConfigError(f"{where}: solver {name!r} takes {entry.kind!r} input, not the previous step's result")
         steps.append(StepConfig(name, dict(params)))
-    return PipelineConfig(kind, tuple(steps), str(raw.get("description", "")), source)
+    surface = SurfaceSampling.from_dict(raw["surface"], source) if "surface" in raw else SurfaceSampling()
+    return PipelineConfig(kind, tuple(steps), str(raw.get("description", "")), source, surface)
 
 
 def default_config(kind: str) -> PipelineConfig:

@@ -22,17 +22,50 @@ from typing import Any, Callable, TypeVar
 from torchsym.core.settings import Settings, Solver
 from torchsym.errors import ConfigError
 
-__all__ = ["INPUT_KINDS", "Registry", "SOLVERS", "SolverEntry", "register_solver"]
+__all__ = [
+    "IMAGE_SUFFIXES", "INPUT_KINDS", "MESH_SUFFIXES", "PHOTO_SUFFIXES", "POINT_SUFFIXES", "USER_KINDS",
+    "InputKind", "Registry", "SOLVERS", "SolverEntry", "register_solver",
+]
 
-#: The kinds of input torchsym knows, and what each is.
-INPUT_KINDS: dict[str, str] = {
-    "pointcloud": "a 3D point cloud, (N, 3) float",
-    "points": "a d-dimensional point set, (N, D) float, D >= 2",
-    "image": "an image, (B, C, H, W) float in [0, 1]",
-    "mesh": "a triangle mesh (torchsym.mesh.Mesh)",
-    "multiview": "photos of one scene from several viewpoints (a folder or a list of paths)",
-    "any": "the previous step's output",
-}
+#: file suffixes of images, of meshes, and of everything that holds points
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
+MESH_SUFFIXES = (".ply", ".obj", ".off", ".stl")
+POINT_SUFFIXES = MESH_SUFFIXES + (".xyz", ".npy", ".txt", ".pts")
+#: photos COLMAP reads (the multi-view input)
+PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp")
+
+
+@dataclasses.dataclass(frozen=True)
+class InputKind:
+    """One kind of input a pipeline takes.
+
+    Attributes:
+        name: the kind's name in configs (``input:``), ``--kind`` and ``detect(kind=...)``.
+        summary: what it is, with its shape.
+        suffixes: the files that hold it (a folder's other files are skipped with a note).
+        grouped: several files make one input (the photos of one scene): a folder, a
+            list of paths or a glob is one input, and a folder of folders one per folder.
+    """
+
+    name: str
+    summary: str
+    suffixes: tuple[str, ...]
+    grouped: bool = False
+
+
+#: The kinds of input torchsym knows, in the one place every front door reads them from.
+INPUT_KINDS: dict[str, InputKind] = {k.name: k for k in (
+    InputKind("pointcloud", "a 3D point cloud, (N, 3) float; a mesh is sampled on its surface", POINT_SUFFIXES),
+    InputKind("points", "a d-dimensional point set, (N, D) float, D >= 2", POINT_SUFFIXES),
+    InputKind("image", "an image, (B, C, H, W) float in [0, 1]", IMAGE_SUFFIXES),
+    InputKind("mesh", "a triangle mesh (torchsym.mesh.Mesh)", MESH_SUFFIXES),
+    InputKind("multiview", "photos of one scene from several viewpoints (a folder, a list of paths or a glob)",
+              PHOTO_SUFFIXES, grouped=True),
+    InputKind("any", "the previous step's output", ()),
+)}
+
+#: the kinds a user may ask for (every kind but ``any``)
+USER_KINDS: tuple[str, ...] = tuple(k for k in INPUT_KINDS if k != "any")
 
 T = TypeVar("T")
 

@@ -4,6 +4,9 @@
 legs, two armrests) that is mirror symmetric, then turned and moved so that the plane is
 not an axis plane. Made by ``scripts/make_sample_data.py`` (seeded); its true plane is
 stored beside it in ``chair_plane.txt``.
+
+``cad``: CAD-style meshes made in code (several parts, non-manifold edges, uneven
+tessellation) with their true plane.
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from torchsym.core.checks import check_dense, scale_problem
+from torchsym.core.registry import IMAGE_SUFFIXES, MESH_SUFFIXES, POINT_SUFFIXES
 from torchsym.errors import InputFileError, InputShapeError, InputValueError
 from torchsym.io.meshfiles import parse_mesh_file
 from torchsym.geometry.mesh import Mesh
@@ -35,9 +36,6 @@ __all__ = [
     "read_pointcloud",
 ]
 
-MESH_SUFFIXES = (".ply", ".obj", ".off", ".stl")
-POINT_SUFFIXES = MESH_SUFFIXES + (".xyz", ".npy", ".txt", ".pts")
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
 
 #: default ``max_points`` of the readers: most points (rows, or mesh vertices) read from a file
 MAX_POINTS = 20_000_000

@@ -16,7 +16,7 @@ from torchsym.core.random import make_generator
 from torchsym.core.results import Result
 from torchsym.geometry.reflection import reflect_points
 from torchsym.manifolds.special_orthogonal import SpecialOrthogonal
-from torchsym.geometry.mesh import Mesh
+from torchsym.geometry.sampling import sample_surface  # re-exported beside the other samplers
 
 __all__ = [
     "SymmetricCloud",
@@ -90,21 +90,6 @@ def planted_symmetric_cloud(
     cloud = _mirror_half(half, torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64), torch.tensor(0.0, dtype=torch.float64))
     cloud = random_rigid_motion(cloud, generator=gen)
     return SymmetricCloud(cloud.points.to(dtype), cloud.normal.to(dtype), cloud.offset.to(dtype), cloud.mirror)
-
-
-def sample_surface(mesh: Mesh, n: int, *, generator: torch.Generator | int | None = None) -> torch.Tensor:
-    """``(n, 3)`` points drawn uniformly by area from the surface of ``mesh``."""
-    n = check_int(n, "n", minimum=1)
-    gen = make_generator(generator)
-    v = mesh.vertices.to(torch.float64)
-    tri = v[mesh.faces]  # (F, 3, 3)
-    area = torch.linalg.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]).norm(dim=1)
-    face = torch.multinomial(area, n, replacement=True, generator=gen)
-    u = torch.rand(n, 2, generator=gen, dtype=torch.float64)
-    flip = u.sum(1) > 1
-    u[flip] = 1 - u[flip]
-    t = tri[face]
-    return t[:, 0] + u[:, :1] * (t[:, 1] - t[:, 0]) + u[:, 1:] * (t[:, 2] - t[:, 0])
 
 
 def mirror_complete(

@@ -5,51 +5,32 @@
                  [--no-resume] [--set KEY=VALUE ...] [--figures DIR] [--max-inline N]
     torchsym evaluate results.jsonl --truth FILE [--json summary.json]
 
-Exit status: 0 when every input is ``ok`` (or every scored input evaluated), 1 when some
-inputs ended ``error`` or ``crashed``, 2 for bad arguments (a pattern matching nothing, a
-config for another kind of input, an unreachable scheduler, a locked results file).
+Exit status, as ``torchsym detect``'s: 0 when every input is ``ok`` (or every scored input
+evaluated), 1 when some inputs ended ``error`` or ``crashed``, 2 for bad arguments (a
+pattern matching nothing, a config for another kind of input, an unreachable scheduler, a
+locked results file), reported as one line ``torchsym: error: ...`` by :func:`torchsym.cli.main`.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 __all__ = ["add_parsers"]
 
 
-def _overrides(items: Sequence[str]) -> dict[str, Any]:
-    import yaml
-
-    from torchsym.errors import ConfigError
-
-    out: dict[str, Any] = {}
-    for item in items:
-        if "=" not in item:
-            raise ConfigError(f"--set: expected KEY=VALUE, got {item!r}")
-        key, value = item.split("=", 1)
-        out[key.strip()] = yaml.safe_load(value)
-    return out
-
-
 def _cmd_run(args: argparse.Namespace) -> int:
-    from torchsym.errors import TorchsymError
+    from torchsym.core.config import parse_overrides
     from torchsym.runner.driver import run
 
-    try:
-        summary = run(
-            args.config, args.inputs, args.out, engine=args.engine, address=args.address, workers=args.workers,
-            threads_per_worker=args.threads, retries=args.retries, resume=not args.no_resume,
-            overrides=_overrides(args.set or []), figures=args.figures, progress=not args.quiet,
-            max_inline=None if args.max_inline < 0 else args.max_inline,
-        )
-    except TorchsymError as exc:
-        print(f"torchsym run: {exc}", file=sys.stderr)
-        return 2
+    summary = run(
+        args.config, args.inputs, args.out, engine=args.engine, address=args.address, workers=args.workers,
+        threads_per_worker=args.threads, retries=args.retries, resume=not args.no_resume,
+        overrides=parse_overrides(args.set or []), figures=args.figures, progress=not args.quiet,
+        max_inline=None if args.max_inline < 0 else args.max_inline,
+    )
     print(
         f"{summary.out}: {summary.n_inputs} inputs, {summary.n_skipped} already done; ran {summary.n_run} on the "
         f"{summary.engine} engine: {summary.n_ok} ok, {summary.n_error} error, {summary.n_crashed} crashed "
@@ -59,14 +40,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from torchsym.errors import TorchsymError
     from torchsym.runner.evaluate import evaluate, format_evaluation
 
-    try:
-        ev = evaluate(args.results, args.truth)
-    except TorchsymError as exc:
-        print(f"torchsym evaluate: {exc}", file=sys.stderr)
-        return 2
+    ev = evaluate(args.results, args.truth)
     print(format_evaluation(ev))
     if args.json is not None:
         Path(args.json).write_text(json.dumps(ev.to_dict(), indent=2))
@@ -85,7 +61,9 @@ def add_parsers(sub: Any) -> None:
         ),
     )
     r.add_argument("config", metavar="CONFIG", help="YAML pipeline file (see configs/)")
-    r.add_argument("--inputs", nargs="+", required=True, metavar="GLOB", help="files, folders or glob patterns (quote them: 'scans/**/*.ply')")
+    r.add_argument("--inputs", nargs="+", required=True, metavar="GLOB",
+                   help="files, folders or glob patterns (quote them: 'scans/**/*.ply'); for a multiview config, "
+                        "a folder of photos is one scene and a folder of folders one scene per folder")
     r.add_argument("--out", required=True, help="the JSON-lines results file")
     r.add_argument("--engine", choices=["auto", "serial", "local", "dask"], default="auto",
                    help="serial: in this process; local: a Dask LocalCluster; dask: the scheduler at --address "
@@ -112,6 +90,6 @@ def add_parsers(sub: Any) -> None:
         ),
     )
     e.add_argument("results", help="the JSON-lines results file of torchsym run")
-    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: docs/design/runner.md)")
+    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: the docstring of torchsym.runner.evaluate)")
     e.add_argument("--json", metavar="FILE", help="also write the figures, per input too, as JSON")
     e.set_defaults(func=_cmd_evaluate)

@@ -8,8 +8,6 @@ engine (:mod:`torchsym.runner.engine`) and writes one record per input as it com
 from __future__ import annotations
 
 import dataclasses
-import glob
-import hashlib
 import importlib
 import logging
 import os
@@ -21,8 +19,10 @@ from pathlib import Path
 from typing import Any
 
 from torchsym.core.config import PipelineConfig, load_config
+from torchsym.core.registry import INPUT_KINDS
 from torchsym.core.results import Result
-from torchsym.errors import ConfigError, InputFileError, InputValueError
+from torchsym.errors import ConfigError, InputValueError
+from torchsym.io.inputs import Source, expand_inputs
 from torchsym.runner.engine import ENGINES, open_engine
 from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key, read_results
 from torchsym.runner.task import TaskSpec
@@ -67,58 +67,16 @@ class RunSummary(Result):
         return self.n_ok + self.n_error + self.n_crashed
 
 
-def _suffixes() -> tuple[tuple[str, ...], tuple[str, ...]]:
-    from torchsym.io.read import IMAGE_SUFFIXES, POINT_SUFFIXES
-
-    return IMAGE_SUFFIXES, POINT_SUFFIXES
-
-
-def expand_inputs(patterns: Sequence[str | Path]) -> list[Path]:
-    """Files named by ``patterns`` (paths, folders, globs with ``**``), sorted, each once.
-
-    A folder gives its files with a known suffix (not recursing); a glob its matching
-    files.
-
-    Raises:
-        InputFileError: a pattern matches no file (the pattern is named).
-    """
-    image, point = _suffixes()
-    known = set(image + point)
-    if isinstance(patterns, (str, Path)):
-        patterns = [patterns]
-    found: dict[str, Path] = {}
-    for pat in patterns:
-        p = Path(pat)
-        if p.is_dir():
-            hits = [q for q in p.iterdir() if q.is_file() and q.suffix.lower() in known]
-        elif p.is_file():
-            hits = [p]
-        else:
-            hits = [Path(q) for q in glob.glob(str(pat), recursive=True) if Path(q).is_file()]
-        if not hits:
-            raise InputFileError(f"--inputs: the pattern {str(pat)!r} matches no file")
-        for q in hits:
-            found.setdefault(str(q.resolve()), q.resolve())
-    return sorted(found.values())
-
-
-def _check_kinds(cfg: PipelineConfig, paths: Sequence[Path]) -> None:
-    """Refuse, before anything runs, inputs whose suffix the config's input kind cannot read."""
-    image, _ = _suffixes()
-    want_image = cfg.input == "image"
-    wrong = [p for p in paths if (p.suffix.lower() in image) != want_image]
+def _check_kinds(cfg: PipelineConfig, sources: Sequence[Source]) -> None:
+    """Refuse, before anything runs, a file given by name that the config's input kind
+    cannot read (a folder's other files are skipped by :func:`expand_inputs`)."""
+    kind = INPUT_KINDS[cfg.input]
+    wrong = [s.name for s in sources if len(s.files) == 1 and Path(s.files[0]).suffix.lower() not in kind.suffixes]
     if wrong:
-        what = "an image" if not want_image else "not an image"
         raise ConfigError(
-            f"config: pipeline {cfg.source!r} takes {cfg.input!r} input, but {str(wrong[0])!r} is {what} "
-            f"({len(wrong)} of {len(paths)} inputs)"
+            f"config: pipeline {cfg.source!r} takes {cfg.input!r} input ({' '.join(kind.suffixes)}), but "
+            f"{wrong[0]!r} is not one ({len(wrong)} of {len(sources)} inputs)"
         )
-
-
-def _stems(paths: Sequence[Path]) -> list[str]:
-    """Picture stems: the file's stem, with a hash of its path where two inputs share one."""
-    counts = Counter(p.stem for p in paths)
-    return [p.stem if counts[p.stem] == 1 else f"{p.stem}_{hashlib.sha1(str(p).encode()).hexdigest()[:8]}" for p in paths]
 
 
 def _record(store: ResultsStore, key: InputKey, outcome: Mapping[str, Any], attempts: int) -> dict[str, Any]:
@@ -128,6 +86,7 @@ def _record(store: ResultsStore, key: InputKey, outcome: Mapping[str, Any], atte
     rec["arrays"] = store.write_arrays(key, outcome["arrays"]) if outcome.get("arrays") else None
     for name in ("error", "seconds"):
         rec[name] = outcome.get(name)
+    rec["notes"] = list(outcome.get("notes") or [])
     rec["attempts"] = attempts
     rec["artifacts"] = list(outcome.get("artifacts") or [])
     return rec
@@ -166,7 +125,9 @@ def run(
 
     Args:
         config: a YAML path, a mapping or a :class:`PipelineConfig`.
-        inputs: paths, folders or glob patterns (``data/**/*.ply``).
+        inputs: paths, folders or glob patterns (``data/**/*.ply``), expanded for the
+            config's input kind by :func:`torchsym.io.inputs.expand_inputs` (for
+            ``multiview``, one scene per folder).
         out: the JSON-lines results file (:mod:`torchsym.runner.store`); inputs already
             done there with the same file and config are skipped.
         engine: ``"serial"``, ``"local"`` (a Dask ``LocalCluster``), ``"dask"`` (the
@@ -210,11 +171,10 @@ def run(
     cfg = config if isinstance(config, PipelineConfig) else load_config(config)
     cfg = cfg.with_overrides(dict(overrides or {}))
     cfg_dict = cfg.to_dict()
-    paths = expand_inputs(inputs)
-    _check_kinds(cfg, paths)
+    sources = expand_inputs(inputs, cfg.input)
+    _check_kinds(cfg, sources)
     digest = config_hash(cfg_dict)
-    keys = [input_key(p, digest) for p in paths]
-    stems = _stems(paths)
+    keys = [input_key(s.name, digest, s.files) for s in sources]
     threads = int(threads_per_worker)
     fig_dir = None if figures is None else str(Path(figures).resolve())
     counts: Counter[str] = Counter()
@@ -222,16 +182,19 @@ def run(
         if store.torn_bytes:
             logger.warning("%s: cut a torn last line (%d bytes)", out, store.torn_bytes)
         todo = [i for i, k in enumerate(keys) if not store.is_done(k)]
-        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, stems[i], tuple(imports), max_inline) for i in todo]
+        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, sources[i].stem, tuple(imports), max_inline,
+                          tuple(str(Path(f).resolve()) for f in sources[i].files), notes=sources[i].notes) for i in todo]
         chosen = _choose_engine(engine, len(specs), address)
-        skipped = len(paths) - len(specs)
-        with _progress(len(paths), skipped, progress) as bar, open_engine(
+        skipped = len(sources) - len(specs)
+        with _progress(len(sources), skipped, progress) as bar, open_engine(
             chosen, specs, address=address, workers=workers, threads=threads, imports=imports,
             retries=retries, max_in_flight=max_in_flight, connect_timeout=connect_timeout,
         ) as (outcomes, engine_seconds):
             for spec, outcome, attempts in outcomes:
                 store.append(_record(store, keys[spec.index], outcome, attempts))
                 counts[outcome["status"]] += 1
+                for note in outcome.get("notes") or []:
+                    logger.warning("%s: %s", spec.input, note)
                 if outcome["status"] == "crashed":
                     logger.warning("%s: crashed on every attempt (%d)", spec.input, attempts)
                 bar.set_postfix(ok=counts["ok"], error=counts["error"], crashed=counts["crashed"], refresh=False)
@@ -243,7 +206,7 @@ def run(
 
         write_index(read_results(out, arrays=False), fig_dir, results=out)
     return RunSummary(
-        str(out), chosen, len(paths), skipped, counts["ok"], counts["error"], counts["crashed"],
+        str(out), chosen, len(sources), skipped, counts["ok"], counts["error"], counts["crashed"],
         time.perf_counter() - t0, engine_seconds + stopping,
     )
 

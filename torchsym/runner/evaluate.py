@@ -1,7 +1,9 @@
 """Scoring a run against ground truth with the library's metrics (:mod:`torchsym.metrics`).
 
-Ground truth comes in one documented format per kind of input; :func:`read_truth` tells
-them apart:
+The scorer is chosen by the kind of ground truth and the records' result type (the
+``"type"`` of each result, registered with :func:`result_scorer`, as pictures are with
+:func:`torchsym.viz.artifact_writer`), never by the keys a record happens to hold. Ground
+truth comes in one documented format per kind of input; :func:`read_truth` tells them apart:
 
 - **photos** (``image``): a text file of ``image x1 y1 x2 y2`` lines, one ground-truth
   axis per line (pixels, origin top-left; ``#`` starts a comment), the format of
@@ -55,7 +57,7 @@ from torchsym.core.results import Result
 from torchsym.errors import InputFileError, InputValueError
 from torchsym.runner.store import read_results
 
-__all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_object_mask", "read_truth"]
+__all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_object_mask", "read_truth", "result_scorer"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -223,19 +225,20 @@ def _ok(rec: Mapping[str, Any]) -> bool:
     return rec.get("status") == "ok" and isinstance(rec.get("result"), Mapping)
 
 
-def _detected_axes(rec: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(axes (K, 4), scores (K,))`` of an image record; empty for a failed one."""
-    empty = (torch.zeros(0, 4, dtype=torch.float64), torch.zeros(0, dtype=torch.float64))
-    if not _ok(rec):
-        return empty
-    r = rec["result"]
-    if "axes" in r:
-        axes = torch.tensor(r["axes"], dtype=torch.float64).reshape(-1, 4)
-        return axes, torch.tensor(r["scores"], dtype=torch.float64).reshape(-1)
+AxesOf = Callable[[Mapping[str, Any]], tuple[torch.Tensor, torch.Tensor]]
+
+
+def _axes(r: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(axes (K, 4), scores (K,))`` of an image-axes result (K >= 0 axes)."""
+    return torch.tensor(r["axes"], dtype=torch.float64).reshape(-1, 4), torch.tensor(r["scores"], dtype=torch.float64).reshape(-1)
+
+
+def _one_axis(r: Mapping[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(axes (K, 4), scores (K,))`` of a one-axis result (``segment``, ``score``); K = 0 when it found none."""
     flat = [v for point in r.get("segment") or [] for v in point]
-    if len(flat) == 4 and None not in flat:  # one axis (pointsymm_image)
+    if len(flat) == 4 and None not in flat:
         return torch.tensor(flat, dtype=torch.float64).reshape(1, 4), torch.tensor([float(r.get("score") or 0.0)], dtype=torch.float64)
-    return empty
+    return torch.zeros(0, 4, dtype=torch.float64), torch.zeros(0, dtype=torch.float64)
 
 
 def _image_size(rec: Mapping[str, Any]) -> tuple[int, int]:
@@ -250,10 +253,11 @@ def _image_size(rec: Mapping[str, Any]) -> tuple[int, int]:
     return int(img.shape[0]), int(img.shape[1])
 
 
-def _score_images(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+def _score_images(pairs: Sequence[tuple[Mapping[str, Any], Any]], axes_of: AxesOf) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
     from torchsym.metrics import AXIS_CRITERIA, evaluate_axes, match_axes
 
-    dets = [_detected_axes(rec) for rec, _ in pairs]
+    empty = (torch.zeros(0, 4, dtype=torch.float64), torch.zeros(0, dtype=torch.float64))
+    dets = [axes_of(rec["result"]) if _ok(rec) else empty for rec, _ in pairs]
     gts = [gt for _, gt in pairs]
     sizes = [_image_size(rec) if _ok(rec) else (1, 1) for rec, _ in pairs]
     summary, rows = {}, [{"n_detections": int(d[0].shape[0]), "n_truth": int(g.shape[0])} for d, g in zip(dets, gts)]
@@ -386,41 +390,77 @@ def _ssm_row(rec: Mapping[str, Any], obj: np.ndarray) -> dict[str, float]:
     return {"auc": sc.auc, "precision": sc.precision, "recall": sc.recall, "f_beta_0_09": sc.f_beta_0_09, "f_beta_0_3": sc.f_beta_0_3}
 
 
-def _score_segmentation(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
-    """Masks (SymmSLIC) by segmentation error; symmetry maps (``score_map``) by the SSM scores."""
+def _segmentation_summary(rows: list[dict[str, Any]], protocol: str) -> dict[str, dict[str, float]]:
+    return {protocol: {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}} if rows else {}
+
+
+def _score_masks(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    """Object masks (SymmSLIC's ``mask``) by the segmentation error over the image and the box."""
     from torchsym.metrics import segmentation_error
 
-    maps = any(_ok(rec) and "score_map" in rec["result"] for rec, _ in pairs)  # a symmetry-map run
     rows = []
     for rec, path in pairs:
         obj, band = read_object_mask(path)
-        if maps:  # a failed input scores an all-zero map
-            rows.append(_ssm_row(rec, obj))
-            continue
         mask = _result_array(rec, "mask").astype(bool) if _ok(rec) else np.zeros_like(obj)  # missed: nothing found
         if mask.shape != obj.shape:
             raise InputValueError(f"results: the mask of {str(rec.get('input'))!r} is {mask.shape}, its ground truth {obj.shape}")
         rows.append(segmentation_error(mask, obj, ignore=band))
-    summary = {}
-    for protocol, keys in (("segmentation", ("over_image", "over_box")), ("ssm", ("auc", "precision", "recall", "f_beta_0_09", "f_beta_0_3"))):
-        got = [r for r in rows if keys[0] in r]
-        if got:
-            summary[protocol] = {k: float(np.mean([r[k] for r in got])) for k in keys}
-    return summary, rows
+    return _segmentation_summary(rows, "segmentation"), rows
+
+
+def _score_maps(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
+    """Symmetry maps (``score_map``) by the SSM scores; a failed input scores an all-zero map."""
+    rows = [_ssm_row(rec, read_object_mask(path)[0]) for rec, path in pairs]
+    return _segmentation_summary(rows, "ssm"), rows
 
 
 def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-#: scorer per kind of ground truth: ``(records, truths) -> (summary, rows)``
-SCORERS: dict[str, Callable[[Sequence[tuple[Mapping[str, Any], Any]]], tuple[dict[str, dict[str, float]], list[dict[str, Any]]]]] = {
-    "image": _score_images,
-    "pointcloud": _score_clouds,
-    "mesh": _score_meshes,
-    "superpixels": _score_superpixels,
-    "segmentation": _score_segmentation,
-}
+Scorer = Callable[[Sequence[tuple[Mapping[str, Any], Any]]], tuple[dict[str, dict[str, float]], list[dict[str, Any]]]]
+
+#: scorers by (kind of ground truth, result type): ``(records, truths) -> (summary, rows)``
+_SCORERS: dict[tuple[str, str], Scorer] = {}
+
+
+def result_scorer(truth: str, *result_types: str) -> Callable[[Scorer], Scorer]:
+    """Decorator: register ``fn(pairs) -> (summary, rows)`` as the scorer of records whose
+    result has one of ``result_types`` (the ``"type"`` a result's ``to_dict()`` writes:
+    its class name) against ground truth of kind ``truth``, as :func:`torchsym.viz.artifact_writer`
+    registers pictures per result type. The first scorer of a kind also scores a run whose
+    every record failed."""
+
+    def deco(fn: Scorer) -> Scorer:
+        for name in result_types:
+            _SCORERS[(truth, name)] = fn
+        return fn
+
+    return deco
+
+
+result_scorer("image", "ReflectionAxesResult", "ReflectionAxesBatch")(functools.partial(_score_images, axes_of=_axes))
+result_scorer("image", "ImageAxisResult")(functools.partial(_score_images, axes_of=_one_axis))
+result_scorer("pointcloud", "ReflectionPlaneResult", "PointSymmResult")(_score_clouds)
+result_scorer("mesh", "IntrinsicSymmetryResult")(_score_meshes)
+result_scorer("superpixels", "SymmSlicResult")(_score_superpixels)
+result_scorer("segmentation", "SymmSlicResult")(_score_masks)
+result_scorer("segmentation", "SymmetryMapResult", "StylizedResult")(_score_maps)
+
+
+def _scorer(kind: str, records: Sequence[Mapping[str, Any]], source: str) -> Scorer:
+    """The scorer of ``records``' result type against ground truth of ``kind``."""
+    types = sorted({str(rec["result"].get("type")) for rec in records if _ok(rec)})
+    if len(types) > 1:
+        raise InputValueError(f"results: records of several result types ({', '.join(types)}); score one run at a time")
+    known = [name for k, name in _SCORERS if k == kind]
+    if not types:  # every record failed: each counts as missed, whatever its type
+        return _SCORERS[(kind, known[0])]
+    if (kind, types[0]) not in _SCORERS:
+        raise InputValueError(
+            f"truth: {source!r} is {kind} ground truth, which scores {', '.join(known)}; the run's results are {types[0]}"
+        )
+    return _SCORERS[(kind, types[0])]
 
 
 def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Path | GroundTruth) -> Evaluation:
@@ -448,7 +488,7 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
             f"truth: no record of the run has ground truth in {gt.source!r} (records like "
             f"{Path(str(records[0].get('input'))).name if records else 'none'!r}, truth names like {names})"
         )
-    summary, rows = SCORERS[gt.kind](scored)
+    summary, rows = _scorer(gt.kind, [rec for rec, _ in scored], gt.source)(scored)
     items = [{"input": rec.get("input"), "status": rec.get("status"), **row} for (rec, _), row in zip(scored, rows)]
     n_failed = sum(1 for rec, _ in scored if not _ok(rec))
     return Evaluation(gt.kind, len(records), len(scored), n_failed, len(records) - len(scored), summary, items, gt.source)

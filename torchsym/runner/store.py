@@ -36,7 +36,7 @@ import hashlib
 import json
 import logging
 import os
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -72,14 +72,19 @@ class InputKey:
         return dataclasses.asdict(self)
 
 
-def input_key(path: str | Path, config_digest: str) -> InputKey:
-    """The :class:`InputKey` of the file at ``path`` (``InputFileError`` if it is gone)."""
+def input_key(path: str | Path, config_digest: str, files: Sequence[str | Path] = ()) -> InputKey:
+    """The :class:`InputKey` of the input at ``path``: the file's size and mtime, or for an
+    input of several ``files`` (a scene's photos) their total size and latest mtime
+    (``InputFileError`` if one is gone)."""
     p = Path(path).resolve()
-    try:
-        st = p.stat()
-    except OSError as exc:
-        raise InputFileError(f"inputs: cannot read {str(p)!r} ({exc.strerror or exc})") from None
-    return InputKey(str(p), int(st.st_size), int(st.st_mtime_ns), config_digest)
+    size, mtime = 0, 0
+    for f in files or (p,):
+        try:
+            st = Path(f).stat()
+        except OSError as exc:
+            raise InputFileError(f"inputs: cannot read {str(f)!r} ({exc.strerror or exc})") from None
+        size, mtime = size + int(st.st_size), max(mtime, int(st.st_mtime_ns))
+    return InputKey(str(p), size, mtime, config_digest)
 
 
 def _parse_lines(path: Path, keep: Callable[[dict[str, Any]], dict[str, Any]] | None = None) -> tuple[list[dict[str, Any]], int]:

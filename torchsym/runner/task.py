@@ -27,9 +27,10 @@ class TaskSpec:
 
     Attributes:
         index: the input's position in the run.
-        input: the input file, resolved path.
+        input: the input as the run names it: the file, or the folder of a scene's photos.
         config: the pipeline config as :meth:`PipelineConfig.to_dict` gives it, with the
-            run's overrides applied.
+            run's overrides applied; None chooses the default pipeline of each input's
+            kind (``torchsym detect`` without ``--config``).
         threads: torch and OpenCV threads for the solve.
         figures_dir: folder for the result's pictures, or None for none.
         stem: file-name stem of the pictures.
@@ -37,16 +38,24 @@ class TaskSpec:
         max_inline: arrays of the result with more elements than this travel and are kept
             apart from the record (:class:`~torchsym.core.results.ArraySink`); None keeps
             every array in the record.
+        files: the files read (:attr:`torchsym.io.inputs.Source.files`); empty: ``input``.
+        kind: the input kind forced (``--kind``), or None.
+        overrides: settings applied to a default pipeline (``config`` None).
+        notes: what the input expansion skipped for this input.
     """
 
     index: int
     input: str
-    config: dict[str, Any]
+    config: dict[str, Any] | None
     threads: int = 1
     figures_dir: str | None = None
     stem: str = ""
     imports: tuple[str, ...] = ()
     max_inline: int | None = 1024
+    files: tuple[str, ...] = ()
+    kind: str | None = None
+    overrides: dict[str, Any] = dataclasses.field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
 
 def _error(exc: BaseException) -> dict[str, Any]:
@@ -56,13 +65,17 @@ def _error(exc: BaseException) -> dict[str, Any]:
 
 
 def run_task(spec: TaskSpec) -> dict[str, Any]:
-    """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds", "artifacts"}``.
+    """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds",
+    "artifacts", "notes", "config"}``: the one way torchsym runs an input from files, for
+    ``torchsym detect`` (in its process) and ``torchsym run`` (on any engine).
 
     ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``, its arrays
     of more than ``spec.max_inline`` elements in ``arrays`` as NumPy arrays and a
     reference in their place) or ``"error"`` (``error`` is ``{"type", "message",
     "where"}``). ``seconds`` is the wall time of reading, building and solving (pictures
-    excluded).
+    excluded). ``notes`` say what :func:`torchsym.api.prepare` decided (files skipped, a
+    mesh sampled on its surface, the pipeline chosen for it); ``config`` is the pipeline
+    run, as :meth:`PipelineConfig.to_dict` gives it.
     """
     import cv2
     import torch
@@ -73,18 +86,22 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         cv2.setNumThreads(spec.threads)
     out: dict[str, Any] = {
         "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
+        "notes": [], "config": None,
     }
     t0 = time.perf_counter()
     try:
         for name in spec.imports:
             importlib.import_module(name)
-        from torchsym.api import prepare
-        from torchsym.core.config import build_pipeline, load_config
+        from torchsym.api import prepare, solve
+        from torchsym.core.config import load_config
+        from torchsym.io.inputs import Source
 
-        cfg = load_config(spec.config)
-        kind, data, cfg = prepare(spec.input, cfg)
-        out["kind"] = kind
-        result = build_pipeline(cfg)(data)
+        source = Source(spec.input, spec.files or (spec.input,), spec.stem, spec.notes)
+        cfg = load_config(spec.config) if spec.config is not None else None
+        prepared = prepare(source, cfg, kind=spec.kind, overrides=spec.overrides)
+        out["kind"], out["notes"], out["config"] = prepared.kind, list(prepared.notes), prepared.config.to_dict()
+        result = solve(prepared)
+        data = prepared.data
         out["seconds"] = time.perf_counter() - t0
         if spec.max_inline is None:
             out["result"] = result.to_dict()

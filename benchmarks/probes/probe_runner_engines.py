@@ -7,7 +7,7 @@ seconds. Items per second leave out the start-up (one warm-up task per worker). 
 is the bound of two independent processes; Dask is the engine the runner is built on
 (docs/design/runner.md), so the runner's speed-up is compared with these.
 
-Usage: python benchmarks/probe_runner_engines.py [--work /tmp/bench_runner] [--n 40] [--repeats 3]
+Usage: python benchmarks/probes/probe_runner_engines.py [--work /tmp/bench_runner] [--n 40] [--repeats 3]
 """
 
 from __future__ import annotations
@@ -16,13 +16,15 @@ import argparse
 import multiprocessing as mp
 import os
 import statistics
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from report import write_report
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]  # benchmarks/
+sys.path.insert(0, str(HERE))
+from report import write_report  # noqa: E402 -- benchmarks/report.py
 
 
 def task(path: str) -> float:
@@ -84,7 +86,7 @@ def main() -> None:
     lines = [
         "# Two workers on this machine: serial, a plain process pool, plain Dask (no runner)",
         "",
-        f"`python benchmarks/probe_runner_engines.py --n {args.n} --repeats {args.repeats}`: {args.n} clouds of "
+        f"`python benchmarks/probes/probe_runner_engines.py --n {args.n} --repeats {args.repeats}`: {args.n} clouds of "
         f"`bench_runner.py` (plane detection, 1 thread), the three engines interleaved {args.repeats} times; "
         f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end.",
         "",
