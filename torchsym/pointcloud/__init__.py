@@ -6,6 +6,13 @@ from torchsym.pointcloud.reflection_plane import (
     ReflectionPlaneSettings,
     detect_reflection_plane,
 )
+from torchsym.pointcloud.reflection_planes import (
+    ReflectionPlanesDetector,
+    ReflectionPlanesResult,
+    ReflectionPlanesSettings,
+    detect_reflection_planes,
+)
+from torchsym.pointcloud.shapes import box_mesh, boxes_mesh, chair_mesh, cone_mesh, prism_mesh, table_mesh
 from torchsym.pointcloud.synthetic import (
     SymmetricCloud,
     add_outliers,
@@ -21,13 +28,23 @@ __all__ = [
     "ReflectionPlaneDetector",
     "ReflectionPlaneResult",
     "ReflectionPlaneSettings",
+    "ReflectionPlanesDetector",
+    "ReflectionPlanesResult",
+    "ReflectionPlanesSettings",
     "SymmetricCloud",
     "add_outliers",
+    "box_mesh",
+    "boxes_mesh",
+    "chair_mesh",
+    "cone_mesh",
     "detect_reflection_plane",
+    "detect_reflection_planes",
     "mirror_complete",
     "perturb",
     "planted_symmetric_cloud",
+    "prism_mesh",
     "random_rigid_motion",
     "remove_part",
     "sample_surface",
+    "table_mesh",
 ]
