@@ -8,11 +8,17 @@ generate all ``k`` planes of a ``k``-fold axis). Planes are ``normals (K, 3)``,
 
 from __future__ import annotations
 
+import math
+
 import torch
 
 from torchsym.pointcloud.reflection_planes.align import reflect_batch
 
-__all__ = ["conjugate_planes", "distinct_planes", "mirror_gaps"]
+__all__ = ["MERGE_ANGLE", "conjugate_planes", "distinct_planes", "mirror_gaps"]
+
+#: planes closer than this (degrees) are one unless their mirror images differ much: the
+#: planes of a k-fold axis are 180 / k apart, and beyond k = 36 the axis is one of revolution
+MERGE_ANGLE = 5.0
 
 
 def mirror_gaps(probe: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, others_n, others_b) -> torch.Tensor:
@@ -23,13 +29,18 @@ def mirror_gaps(probe: torch.Tensor, normals: torch.Tensor, offsets: torch.Tenso
     return (a[:, None] - b[None]).norm(dim=-1).median(-1).values
 
 
-def distinct_planes(probe: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, order: torch.Tensor, tol: float) -> list[int]:
+def distinct_planes(
+    probe: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, order: torch.Tensor, tol: float,
+    angle: float = MERGE_ANGLE,
+) -> list[int]:
     """Indices of the planes in ``order`` (best first) that are not within ``tol`` (the
-    median mirror-image gap, :func:`mirror_gaps`) of a plane kept before them."""
+    median mirror-image gap, :func:`mirror_gaps`) of a plane kept before them, nor within
+    ``angle`` degrees of one with a mirror-image gap under ``4 tol``."""
     if order.numel() == 0:
         return []
     n, b = normals[order], offsets[order]
-    close = mirror_gaps(probe, n, b, n, b) < tol  # (K, K)
+    gaps = mirror_gaps(probe, n, b, n, b)  # (K, K)
+    close = (gaps < tol) | (((n @ n.T).abs() > math.cos(math.radians(angle))) & (gaps < 4.0 * tol))
     kept: list[int] = []
     for i in range(order.numel()):
         if not any(bool(close[i, j]) for j in kept):

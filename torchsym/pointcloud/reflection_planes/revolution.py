@@ -46,18 +46,21 @@ def _line_point(n1, b1, n2, b2, near: torch.Tensor) -> torch.Tensor:
 
 
 def candidate_axes(
-    normals: torch.Tensor, offsets: torch.Tensor, centered: torch.Tensor, centre: torch.Tensor, eigen_gap: float
+    normals: torch.Tensor, offsets: torch.Tensor, centered: torch.Tensor, centre: torch.Tensor, eigen_gap: float,
+    max_planes: int = 8,
 ) -> list[tuple[torch.Tensor, torch.Tensor]]:
-    """Candidate axes ``(direction, point)``: where each pair of planes meets (when they
-    are at least 5 degrees apart), and the principal axis of ``centered (M, 3)`` (about
-    ``centre (3,)``) whose other two variances differ by less than ``eigen_gap`` (relative)."""
+    """Candidate axes ``(direction, point)``: the principal axis of ``centered (M, 3)``
+    (about ``centre (3,)``) whose other two variances differ by less than ``eigen_gap``
+    (relative), and where each pair of the first ``max_planes`` planes meets (when they
+    are at least 5 degrees apart)."""
     out = []
     lam, vec = torch.linalg.eigh(centered.T @ centered)  # ascending
     for k, (i, j) in enumerate([(1, 2), (0, 2), (0, 1)]):
         if float(lam[j] - lam[i]) <= eigen_gap * float(lam[j]):
             out.append((vec[:, k], centre))
-    for i in range(normals.shape[0]):
-        for j in range(i + 1, normals.shape[0]):
+    k = min(normals.shape[0], max_planes)
+    for i in range(k):
+        for j in range(i + 1, k):
             d = torch.linalg.cross(normals[i], normals[j])
             if float(d.norm()) > math.sin(math.radians(5.0)):
                 out.append((d / d.norm(), _line_point(normals[i], offsets[i], normals[j], offsets[j], centre)))
@@ -79,14 +82,16 @@ def test_axes(
     best first. Two axes are one when within ``merge_tol`` of each other (ends of a unit
     segment, either orientation)."""
     angles = torch.tensor([2.0 * math.pi * ((1 + k) * _GOLDEN % 1.0) for k in range(n_angles)], dtype=torch.float64)
-    found: list[tuple[torch.Tensor, torch.Tensor, float]] = []
+    scored = []
     for d, p in axes:
-        if any(_same_axis(d, p, f[0], f[1], merge_tol) for f in found):
-            continue
         worst = float(test.ratios(rotation_transforms(d, p, angles.to(d)), bound=max_ratio).max())
         if worst <= max_ratio:
+            scored.append((d, p, worst))
+    found: list[tuple[torch.Tensor, torch.Tensor, float]] = []
+    for d, p, worst in sorted(scored, key=lambda f: f[2]):  # the best of each group of near-copies
+        if not any(_same_axis(d, p, f[0], f[1], merge_tol) for f in found):
             found.append((d, p, worst))
-    return sorted(found, key=lambda f: f[2])
+    return found
 
 
 def _same_axis(d1, p1, d2, p2, tol: float) -> bool:
