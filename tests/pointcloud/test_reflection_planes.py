@@ -184,3 +184,20 @@ def test_picture(box, tmp_path):
     paths = torchsym.viz.write_artifacts(res, pts, tmp_path, "box")
     assert sorted(p.name for p in paths) == ["box_planes.ply", "box_planes.png"]
     assert all(p.stat().st_size > 0 for p in paths)
+
+
+def test_group_of_one_plane_result():
+    from torchsym.pointcloud import detect_reflection_plane
+
+    res = detect_reflection_plane(_cloud(box_mesh((3.0, 2.0, 1.0)), 2000))
+    g = symmetry_group(res)
+    assert g.order == 2 and g.reflections.shape[0] == 1 and g.rotations.shape[0] == 0
+
+
+def test_picture_without_planes(tmp_path):
+    g = torch.Generator().manual_seed(5)
+    pts = torch.randn(400, 3, generator=g) * torch.tensor([1.0, 0.5, 0.2])
+    res = detect_reflection_planes(pts, accept={"max_ratio": 1.0})
+    assert res.n_planes == 0 or bool((res.ratios <= 1.0).all())
+    paths = torchsym.viz.write_artifacts(res, pts, tmp_path, "blob")
+    assert all(p.stat().st_size > 0 for p in paths)
