@@ -37,6 +37,7 @@ shipped config, no overrides); ``one plane``, the one-plane detector
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import statistics
@@ -202,8 +203,24 @@ def truth(mesh: Mesh, g: torch.Generator) -> dict:
             axes.append((d, p))
     on_axis = [any(abs(float(n @ d)) < math.sin(math.radians(3.0)) for d, _ in axes) for n, _ in planes]
     exact = [p for p, o in zip(planes, on_axis) if p[1] <= EXACT and not o]
-    return {"test": full, "centroid": centroid, "exact": exact, "axes": axes,
-            "near": [p for p, o in zip(planes, on_axis) if EXACT < p[1] <= NEAR and not o], "diag": 1.0}
+    return {"a": a, "b": b, "centroid": centroid, "exact": exact, "axes": axes,
+            "near": [p for p, o in zip(planes, on_axis) if EXACT < p[1] <= NEAR and not o]}
+
+
+def cached_truth(mesh: Mesh, g: torch.Generator, cache: Path | None, key: str) -> dict:
+    """:func:`truth`, read from ``cache/key.pt`` when there (the generator then advances
+    as :func:`truth` would have advanced it: its state is stored beside)."""
+    path = cache / f"{key}.pt" if cache is not None else None
+    if path is not None and path.exists():
+        t = torch.load(path)
+        g.set_state(t.pop("generator"))
+    else:
+        t = truth(mesh, g)
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            torch.save({**t, "generator": g.get_state()}, path)
+    t["test"] = distance_test(t["a"], t["b"], 20000, torch.Generator().manual_seed(0))
+    return t
 
 
 # ---------------------------------------------------------------- evaluation
@@ -265,20 +282,30 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=53)
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"))
     ap.add_argument("--stem", default="planes")
+    ap.add_argument("--cache", default=None, help="folder caching each shape's truth (slow to compute)")
+    ap.add_argument("--shard", default="0/1", help="i/n: run shapes with index = i mod n, write their rows only")
+    ap.add_argument("--merge", nargs="*", default=None, help="row files of the shards to merge into the report")
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
     root = Path(__file__).resolve().parents[1]
     planes_cfg = root / "configs" / "pointcloud_planes.yaml"
     one_cfg = root / "configs" / "pointcloud_plane.yaml"
+    if args.merge is not None:
+        rows = sorted((r for f in args.merge for r in json.loads(Path(f).read_text())), key=lambda r: r["index"])
+        return report(rows, args)
     shapes = make_shapes(Path(args.data), args.n_shapes, args.seed)
+    shard, n_shards = (int(v) for v in args.shard.split("/"))
+    cache = Path(args.cache) if args.cache else None
     rows = []
     for idx, (name, mesh) in enumerate(shapes):
+        if idx % n_shards != shard:
+            continue
         g = torch.Generator().manual_seed(args.seed * 7919 + idx)
         mesh = posed(mesh, g)
         variant = VARIANTS[idx % len(VARIANTS)]
-        t = truth(mesh, g)
+        t = cached_truth(mesh, g, cache, f"{args.seed}_{args.n_shapes}_{idx}")
         pts = variant_points(mesh, variant, args.n_points, g).float()
-        row = {"shape": name, "variant": variant, "part": "choose" if idx % 2 == 0 else "report",
+        row = {"index": idx, "shape": name, "variant": variant, "part": "choose" if idx % 2 == 0 else "report",
                "exact": len(t["exact"]), "axes": len(t["axes"]), "near": len(t["near"]),
                "exact_ratios": [round(p[1], 3) for p in t["exact"]]}
         for key, cfg in (("planes", planes_cfg), ("one_plane", one_cfg)):
@@ -291,13 +318,24 @@ def main(argv=None) -> int:
         print(f"{idx:3d} {name:24s} {variant:7s} exact {row['exact']} axes {row['axes']} near {row['near']} | "
               f"reported {p['reported']} true {p['true']} found {p['found']}/{p['must']} "
               f"{'OK ' if p['count_right'] else 'BAD'} {p['seconds']:.2f}s {p['ratios']}", flush=True)
+        row["load"] = os.getloadavg()[0]
+    if n_shards > 1:
+        Path(args.out).mkdir(parents=True, exist_ok=True)
+        (Path(args.out) / f"{args.stem}_rows{shard}.json").write_text(json.dumps(rows))
+        return 0
+    return report(rows, args)
+
+
+def report(rows: list[dict], args) -> int:
+    """Print and write the tables of ``rows``."""
     load = os.getloadavg()
+    loads = sorted(r["load"] for r in rows)
     out = {"rows": rows, "load": load, "n_points": args.n_points, "summary": {}}
     lines = [
         "# Every reflection plane (issue 53)", "",
         f"{len(rows)} shapes at {args.n_points} surface samples; truth by geometry (exact <= {EXACT}, true <= {NEAR}, "
-        f"distance ratio); load average {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} on 2 cores "
-        "(times scale with it).", "",
+        f"distance ratio); 1-minute load average during the runs {loads[0]:.1f}-{loads[-1]:.1f} "
+        f"(median {statistics.median(loads):.1f}) on 2 cores shared with other jobs (times scale with it).", "",
         "| part | method | shapes | precision | recall | count right | median s | p90 s | max s |",
         "|---|---|---|---|---|---|---|---|---|",
     ]

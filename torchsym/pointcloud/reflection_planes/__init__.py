@@ -9,7 +9,15 @@ the planes generate and :mod:`.bop` writes them as BOP's ``models_info.json`` fi
 """
 
 from torchsym.pointcloud.reflection_planes.detect import ReflectionPlanesDetector, detect_reflection_planes
+from torchsym.pointcloud.reflection_planes.group import SymmetryGroup, symmetry_group
 from torchsym.pointcloud.reflection_planes.result import ReflectionPlanesResult
 from torchsym.pointcloud.reflection_planes.settings import ReflectionPlanesSettings
 
-__all__ = ["ReflectionPlanesDetector", "ReflectionPlanesResult", "ReflectionPlanesSettings", "detect_reflection_planes"]
+__all__ = [
+    "ReflectionPlanesDetector",
+    "ReflectionPlanesResult",
+    "ReflectionPlanesSettings",
+    "SymmetryGroup",
+    "detect_reflection_planes",
+    "symmetry_group",
+]

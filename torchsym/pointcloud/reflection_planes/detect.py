@@ -43,6 +43,9 @@ __all__ = ["ReflectionPlanesDetector", "detect_reflection_planes"]
 
 #: points whose mirror images tell whether two planes are one (median gap)
 _GAP_PROBE = 200
+#: most planes (lowest ratios first) reflected in each other per closure round: 12 planes
+#: of a k-fold axis generate all of them, and their 132 images stay cheap to compare
+_MAX_GENERATORS = 12
 
 
 def detect_reflection_planes(
@@ -165,16 +168,19 @@ def detect_reflection_planes(
 
 def _closure(normals, offsets, ratios, test: DistanceTest, probe, merge_tol, polish_q, match, settings):
     """For ``accept.closure_rounds`` rounds, the reflections of the accepted planes
-    ``normals (K, 3)``, ``offsets (K,)`` (``ratios (K,)``) of ratio at most
-    ``accept.generator_ratio`` in each other that match no plane tested yet, polished by
+    ``normals (K, 3)``, ``offsets (K,)`` (``ratios (K,)``) of ratio within
+    ``accept.generator_factor`` of the least (the best ``_MAX_GENERATORS``) in each other that match no plane tested yet, polished by
     ``match`` and tested. Returns the accepted ``(normals, offsets, ratios)``, distinct,
     best first, and the number of new planes tested."""
     acc, al = settings.accept, settings.align
     tested_n, tested_b = normals, offsets
     n_new = 0
     for _ in range(acc.closure_rounds):
-        gen_ok = ratios <= acc.generator_ratio
-        if int(gen_ok.sum()) < 2 or n_new >= acc.max_planes:
+        if ratios.numel() == 0:
+            break
+        gen_ok = (ratios <= acc.generator_factor * float(ratios.min())).nonzero()[:, 0]
+        gen_ok = gen_ok[ratios[gen_ok].argsort()][:_MAX_GENERATORS]
+        if gen_ok.numel() < 2 or n_new >= acc.max_planes:
             break
         new_n, new_b = canonical_sign(*conjugate_planes(normals[gen_ok], offsets[gen_ok]))
         fresh = mirror_gaps(probe, new_n, new_b, tested_n, tested_b).min(1).values >= merge_tol

@@ -47,9 +47,8 @@ class AcceptSettings(Settings):
     min_score: float = setting(
         0.05, "... and whose mirror share beats the best of the chance planes by this (the score)", low=0.0, high=1.0
     )
-    generator_ratio: float = setting(
-        1.2, "planes at most this ratio generate new candidates (reflected in each other)", unit="x sampling distance",
-        low=1.0,
+    generator_factor: float = setting(
+        1.2, "planes within this factor of the least ratio generate new candidates (reflected in each other)", low=1.0
     )
     closure_rounds: int = setting(3, "rounds of planes reflected in accepted planes, tested in turn (0: none)", low=0)
     max_planes: int = setting(64, "most planes the closure adds to the tests", low=1)
