@@ -124,13 +124,14 @@ def detect_reflection_planes(
 
     # 4. The distance test on a random split of the cloud.
     acc = settings.accept
-    test = split_test(xs, acc.n_queries, gen)
+    test = split_test(xs, acc.n_queries, gen, local=acc.local_baseline)
     ratios = test.plane_ratios(normals, offsets, bound=acc.max_ratio)
     ok = ratios <= acc.max_ratio
     normals, offsets, ratios = normals[ok], offsets[ok], ratios[ok]
     n_tested = int(ok.numel())
 
-    # 5. Axes of revolution replace the planes through them (first: a fan of planes has no end).
+    # 5. Axes of revolution replace the planes through them (first: a fan of planes has no end);
+    #    the plane across each axis is tested.
     axes: list[tuple[torch.Tensor, torch.Tensor, float]] = []
     rev = settings.revolution
     if rev.enabled:
@@ -141,6 +142,20 @@ def detect_reflection_planes(
             if not any(contains_axis(normals[k], offsets[k], d, p, 2.0 * merge_tol) for d, p, _ in axes)
         ]
         normals, offsets, ratios = normals[off_axis], offsets[off_axis], ratios[off_axis]
+        if axes:  # the one plane a surface of revolution may have besides: across its axis
+            across_n = torch.stack([d for d, _, _ in axes])
+            proj = xs @ across_n.T  # (N, A): the plane through the middle of the extent, whatever the density
+            across_b = -0.5 * (torch.quantile(proj, 0.005, dim=0) + torch.quantile(proj, 0.995, dim=0))
+            fresh = mirror_gaps(ctx.queries[:_GAP_PROBE], across_n, across_b, normals, offsets).min(1).values >= merge_tol \
+                if normals.shape[0] else torch.ones(len(axes), dtype=torch.bool)
+            across_n, across_b = align_planes(
+                polish_q, match, across_n[fresh], across_b[fresh], max_iters=al.polish_iters, tol_angle=al.tol_angle
+            )
+            across_r = test.plane_ratios(across_n, across_b, bound=acc.max_ratio)
+            ok = across_r <= acc.max_ratio
+            normals, offsets = torch.cat([normals, across_n[ok]]), torch.cat([offsets, across_b[ok]])
+            ratios = torch.cat([ratios, across_r[ok]])
+            n_tested += int(across_r.numel())
 
     # 6. Planes reflected in accepted ones, tested in turn; duplicates merged.
     planes_n, planes_b, ratios, n_new = _closure(

@@ -32,11 +32,17 @@ class DistanceTest:
         queries: ``(Q, 3)`` points of the first sample.
         index: nearest-neighbour index over the second sample.
         base: mean distance from ``queries`` to the second sample (the sampling distance).
+        local: None, or the first sample's index and ``(N1,)`` each of its points'
+            distance to the second sample: the sampling distance is then measured where
+            the moved queries land (the mean over the first sample's points nearest to
+            them), so that a density falling across the shape does not raise the ratio
+            of a transform that moves dense parts onto sparse ones.
     """
 
     queries: torch.Tensor
     index: KNNIndex
     base: float
+    local: tuple[KNNIndex, torch.Tensor] | None = None
 
     def ratio(self, transform: torch.Tensor) -> float:
         """Mean distance from ``transform (4, 4)`` applied to the queries to the second
@@ -59,11 +65,24 @@ class DistanceTest:
         cut = 4.0 * bound * self.base
         d, _ = self.index.query(moved.reshape(-1, 3), max_distance=cut)
         d = d.reshape(k, -1)
-        ratio = d.clamp_max(cut).mean(1) / self.base  # a lower bound; exact when nothing was cut
+        base = self._bases(moved)  # (K,)
+        ratio = d.clamp_max(cut).mean(1) / base  # a lower bound; exact when nothing was cut
         redo = (ratio <= bound) & torch.isinf(d).any(1)
         for j in redo.nonzero()[:, 0].tolist():
-            ratio[j] = self.index.query(moved[j])[0].mean() / self.base
+            ratio[j] = self.index.query(moved[j])[0].mean() / base[j]
         return ratio
+
+    def _bases(self, moved: torch.Tensor) -> torch.Tensor:
+        """``(K,)`` the sampling distance for each transform's moved queries ``(K, Q, 3)``."""
+        k = moved.shape[0]
+        if self.local is None:
+            return torch.full((k,), self.base, dtype=moved.dtype, device=moved.device)
+        index, dist = self.local
+        # far images (not a symmetry) take the global sampling distance: their search is the slow one
+        _, j = index.query(moved.reshape(-1, 3), max_distance=4.0 * self.base)
+        dist = torch.cat([dist, dist.new_full((1,), self.base)])
+        base = dist[j].reshape(k, -1).mean(1).to(moved.dtype)
+        return torch.where(base > 0, base, torch.full_like(base, self.base))
 
     def plane_ratios(self, normals: torch.Tensor, offsets: torch.Tensor, *, bound: float = float("inf")) -> torch.Tensor:
         """:meth:`ratios` of the reflections in planes ``normals (K, 3)``, ``offsets (K,)``."""
@@ -72,17 +91,23 @@ class DistanceTest:
         return self.ratios(reflection_transform(normals, offsets), bound=bound)
 
 
-def distance_test(first: torch.Tensor, second: torch.Tensor, n_queries: int, generator: torch.Generator) -> DistanceTest:
+def distance_test(
+    first: torch.Tensor, second: torch.Tensor, n_queries: int, generator: torch.Generator, *, local: bool = False
+) -> DistanceTest:
     """A :class:`DistanceTest` from two independent samples ``first (N, 3)`` and
-    ``second (M, 3)`` of one surface, with up to ``n_queries`` random points of ``first``."""
+    ``second (M, 3)`` of one surface, with up to ``n_queries`` random points of ``first``;
+    ``local``: the sampling distance measured where the moved queries land."""
     queries = first[random_subset(first.shape[0], n_queries, generator)]
     index = KNNIndex(second)
     d, _ = index.query(queries)
-    return DistanceTest(queries, index, float(d.mean()))
+    loc = None
+    if local:
+        loc = (KNNIndex(first), index.query(first)[0])
+    return DistanceTest(queries, index, float(d.mean()), loc)
 
 
-def split_test(points: torch.Tensor, n_queries: int, generator: torch.Generator) -> DistanceTest:
+def split_test(points: torch.Tensor, n_queries: int, generator: torch.Generator, *, local: bool = False) -> DistanceTest:
     """A :class:`DistanceTest` from a random split of ``points (N, 3)`` into halves."""
     perm = torch.randperm(points.shape[0], generator=generator)
     half = points.shape[0] // 2
-    return distance_test(points[perm[:half]], points[perm[half:]], n_queries, generator)
+    return distance_test(points[perm[:half]], points[perm[half:]], n_queries, generator, local=local)

@@ -44,6 +44,9 @@ class AcceptSettings(Settings):
         1.6, "accept a plane whose mirror images lie at most this far from the cloud", unit="x sampling distance", low=1.0
     )
     n_queries: int = setting(3000, "points of one half whose distances measure the ratio", low=4)
+    local_baseline: bool = setting(
+        True, "measure the sampling distance where the mirror images land (uneven density), not over the whole cloud"
+    )
     min_score: float = setting(
         0.05, "... and whose mirror share beats the best of the chance planes by this (the score)", low=0.0, high=1.0
     )
