@@ -263,6 +263,7 @@ def summarise(rows: list[dict], key: str) -> dict:
     must = sum(r[key]["must"] for r in rows)
     found = sum(r[key]["found"] for r in rows)
     secs = sorted(r[key]["seconds"] for r in rows)
+    cpus = sorted(r[key]["cpu_seconds"] for r in rows)
     return {
         "shapes": len(rows),
         "precision": true / reported if reported else 1.0,
@@ -271,6 +272,8 @@ def summarise(rows: list[dict], key: str) -> dict:
         "median_s": statistics.median(secs) if secs else 0.0,
         "p90_s": secs[int(0.9 * (len(secs) - 1))] if secs else 0.0,
         "max_s": secs[-1] if secs else 0.0,
+        "median_cpu_s": statistics.median(cpus) if cpus else 0.0,
+        "p90_cpu_s": cpus[int(0.9 * (len(cpus) - 1))] if cpus else 0.0,
     }
 
 
@@ -309,15 +312,15 @@ def main(argv=None) -> int:
                "exact": len(t["exact"]), "axes": len(t["axes"]), "near": len(t["near"]),
                "exact_ratios": [round(p[1], 3) for p in t["exact"]]}
         for key, cfg in (("planes", planes_cfg), ("one_plane", one_cfg)):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             res = torchsym.detect(pts, cfg)
-            sec = time.perf_counter() - t0
-            row[key] = {**judge(res, t), "seconds": sec}
+            sec, cpu = time.perf_counter() - t0, time.process_time() - c0
+            row[key] = {**judge(res, t), "seconds": sec, "cpu_seconds": cpu}
         rows.append(row)
         p = row["planes"]
         print(f"{idx:3d} {name:24s} {variant:7s} exact {row['exact']} axes {row['axes']} near {row['near']} | "
               f"reported {p['reported']} true {p['true']} found {p['found']}/{p['must']} "
-              f"{'OK ' if p['count_right'] else 'BAD'} {p['seconds']:.2f}s {p['ratios']}", flush=True)
+              f"{'OK ' if p['count_right'] else 'BAD'} {p['seconds']:.2f}s (CPU {p['cpu_seconds']:.2f}s) {p['ratios']}", flush=True)
         row["load"] = os.getloadavg()[0]
     if n_shards > 1:
         Path(args.out).mkdir(parents=True, exist_ok=True)
@@ -336,8 +339,8 @@ def report(rows: list[dict], args) -> int:
         f"{len(rows)} shapes at {args.n_points} surface samples; truth by geometry (exact <= {EXACT}, true <= {NEAR}, "
         f"distance ratio); 1-minute load average during the runs {loads[0]:.1f}-{loads[-1]:.1f} "
         f"(median {statistics.median(loads):.1f}) on 2 cores shared with other jobs (times scale with it).", "",
-        "| part | method | shapes | precision | recall | count right | median s | p90 s | max s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| part | method | shapes | precision | recall | count right | median s | p90 s | max s | median CPU s | p90 CPU s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for part in ("choose", "report", "all"):
         sel = [r for r in rows if part == "all" or r["part"] == part]
@@ -346,7 +349,8 @@ def report(rows: list[dict], args) -> int:
             out["summary"][f"{part}/{key}"] = s
             lines.append(
                 f"| {part} | {key.replace('_', ' ')} | {s['shapes']} | {s['precision']:.3f} | {s['recall']:.3f} | "
-                f"{s['count_right']:.3f} | {s['median_s']:.2f} | {s['p90_s']:.2f} | {s['max_s']:.2f} |"
+                f"{s['count_right']:.3f} | {s['median_s']:.2f} | {s['p90_s']:.2f} | {s['max_s']:.2f} | "
+                f"{s['median_cpu_s']:.2f} | {s['p90_cpu_s']:.2f} |"
             )
     lines += ["", "Per variant (report part, planes):", "", "| variant | shapes | precision | recall | count right |", "|---|---|---|---|---|"]
     for v in VARIANTS:
