@@ -114,7 +114,7 @@ def detect_reflection_planes(
     kept = distinct_planes(ctx.queries[:_GAP_PROBE], normals, offsets, order, merge_tol)
     normals, offsets = normals[kept], offsets[kept]
 
-    # 3. The kept planes polished on the whole cloud, merged again.
+    # 3. The kept planes polished on the whole cloud.
     whole = subs.sub is xs
     full_index = subs.index if whole else KNNIndex(xs)
     polish_q = xs[random_subset(xs.shape[0], al.polish_queries, gen)]
@@ -133,29 +133,11 @@ def detect_reflection_planes(
     # 5. Axes of revolution replace the planes through them (first: a fan of planes has no end);
     #    the plane across each axis is tested.
     axes: list[tuple[torch.Tensor, torch.Tensor, float]] = []
-    rev = settings.revolution
-    if rev.enabled:
-        cand = candidate_axes(normals, offsets, subs.centered, xs.mean(0), rev.eigen_gap)
-        axes = test_axes(cand, test, rev.n_angles, acc.max_ratio, rev.merge_distance)
-        off_axis = [
-            k for k in range(normals.shape[0])
-            if not any(contains_axis(normals[k], offsets[k], d, p, 2.0 * merge_tol) for d, p, _ in axes)
-        ]
-        normals, offsets, ratios = normals[off_axis], offsets[off_axis], ratios[off_axis]
-        if axes:  # the one plane a surface of revolution may have besides: across its axis
-            across_n = torch.stack([d for d, _, _ in axes])
-            proj = xs @ across_n.T  # (N, A): the plane through the middle of the extent, whatever the density
-            across_b = -0.5 * (torch.quantile(proj, 0.005, dim=0) + torch.quantile(proj, 0.995, dim=0))
-            fresh = mirror_gaps(ctx.queries[:_GAP_PROBE], across_n, across_b, normals, offsets).min(1).values >= merge_tol \
-                if normals.shape[0] else torch.ones(len(axes), dtype=torch.bool)
-            across_n, across_b = align_planes(
-                polish_q, match, across_n[fresh], across_b[fresh], max_iters=al.polish_iters, tol_angle=al.tol_angle
-            )
-            across_r = test.plane_ratios(across_n, across_b, bound=acc.max_ratio)
-            ok = across_r <= acc.max_ratio
-            normals, offsets = torch.cat([normals, across_n[ok]]), torch.cat([offsets, across_b[ok]])
-            ratios = torch.cat([ratios, across_r[ok]])
-            n_tested += int(across_r.numel())
+    if settings.revolution.enabled:
+        normals, offsets, ratios, axes, n_across = _revolution(
+            normals, offsets, ratios, xs, subs.centered, test, ctx.queries[:_GAP_PROBE], merge_tol, polish_q, match, settings
+        )
+        n_tested += n_across
 
     # 6. Planes reflected in accepted ones, tested in turn; duplicates merged.
     planes_n, planes_b, ratios, n_new = _closure(
@@ -179,6 +161,35 @@ def detect_reflection_planes(
         norm, planes_n, planes_b, scores, ratios, pairs, keep, axes, tol, test.base, pts.dtype,
         n_starts=len(starts), n_tested=n_tested, timings=timings,
     )
+
+
+def _revolution(normals, offsets, ratios, xs, centered, test: DistanceTest, probe, merge_tol, polish_q, match, settings):
+    """The axes of revolution among the candidates (:func:`~.revolution.candidate_axes`),
+    the accepted planes ``normals (K, 3)``, ``offsets (K,)``, ``ratios (K,)`` without those
+    through an axis, and with the plane across each axis when it passes the test (through
+    the middle of the cloud's extent along the axis, whatever the density, then polished).
+    Returns ``(normals, offsets, ratios, axes, planes tested)``."""
+    acc, al, rev = settings.accept, settings.align, settings.revolution
+    cand = candidate_axes(normals, offsets, centered, xs.mean(0), rev.eigen_gap)
+    axes = test_axes(cand, test, rev.n_angles, acc.max_ratio, rev.merge_distance)
+    if not axes:
+        return normals, offsets, ratios, axes, 0
+    off_axis = [
+        k for k in range(normals.shape[0])
+        if not any(contains_axis(normals[k], offsets[k], d, p, 2.0 * merge_tol) for d, p, _ in axes)
+    ]
+    normals, offsets, ratios = normals[off_axis], offsets[off_axis], ratios[off_axis]
+    across_n = torch.stack([d for d, _, _ in axes])
+    proj = xs @ across_n.T  # (N, A)
+    across_b = -0.5 * (torch.quantile(proj, 0.005, dim=0) + torch.quantile(proj, 0.995, dim=0))
+    if normals.shape[0]:
+        fresh = mirror_gaps(probe, across_n, across_b, normals, offsets).min(1).values >= merge_tol
+        across_n, across_b = across_n[fresh], across_b[fresh]
+    across_n, across_b = align_planes(polish_q, match, across_n, across_b, max_iters=al.polish_iters, tol_angle=al.tol_angle)
+    across_r = test.plane_ratios(across_n, across_b, bound=acc.max_ratio)
+    ok = across_r <= acc.max_ratio
+    normals, offsets = torch.cat([normals, across_n[ok]]), torch.cat([offsets, across_b[ok]])
+    return normals, offsets, torch.cat([ratios, across_r[ok]]), axes, int(across_r.numel())
 
 
 def _closure(normals, offsets, ratios, test: DistanceTest, probe, merge_tol, polish_q, match, settings):
