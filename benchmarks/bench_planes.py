@@ -25,7 +25,7 @@ each sampled at 20,000 points as it comes in turn: clean, with Gaussian noise (0
 the diagonal), with three holes (2 % of the points each), or with the density falling to
 40 % along a random direction (the truth is always the clean surface's).
 Shapes with an even index are the *choose* part (settings were chosen on them), odd the
-*report* part; both are printed.
+*report* part; both are printed. Variants cycle over pairs of shapes, so both parts get each.
 
 Methods: ``planes``, ``torchsym.detect(points, "configs/pointcloud_planes.yaml")`` (the
 shipped config, no overrides); ``one plane``, the one-plane detector
@@ -305,7 +305,7 @@ def main(argv=None) -> int:
             continue
         g = torch.Generator().manual_seed(args.seed * 7919 + idx)
         mesh = posed(mesh, g)
-        variant = VARIANTS[idx % len(VARIANTS)]
+        variant = VARIANTS[(idx // 2) % len(VARIANTS)]  # both parts get every variant
         t = cached_truth(mesh, g, cache, f"{args.seed}_{args.n_shapes}_{idx}")
         pts = variant_points(mesh, variant, args.n_points, g).float()
         row = {"index": idx, "shape": name, "variant": variant, "part": "choose" if idx % 2 == 0 else "report",
@@ -352,11 +352,21 @@ def report(rows: list[dict], args) -> int:
                 f"{s['count_right']:.3f} | {s['median_s']:.2f} | {s['p90_s']:.2f} | {s['max_s']:.2f} | "
                 f"{s['median_cpu_s']:.2f} | {s['p90_cpu_s']:.2f} |"
             )
-    lines += ["", "Per variant (report part, planes):", "", "| variant | shapes | precision | recall | count right |", "|---|---|---|---|---|"]
+    lines += ["", "Per variant (planes):", "", "| variant | part | shapes | precision | recall | count right |", "|---|---|---|---|---|---|"]
     for v in VARIANTS:
-        sel = [r for r in rows if r["variant"] == v and r["part"] == "report"]
+        for part in ("choose", "report"):
+            sel = [r for r in rows if r["variant"] == v and r["part"] == part]
+            s = summarise(sel, "planes")
+            lines.append(f"| {v} | {part} | {s['shapes']} | {s['precision']:.3f} | {s['recall']:.3f} | {s['count_right']:.3f} |")
+    lines += ["", "Per family (planes, both parts):", "", "| family | shapes | precision | recall | count right | median CPU s |", "|---|---|---|---|---|---|"]
+    fams: dict[str, list] = {}
+    for r in rows:
+        fam = "CGAL mirrored" if r["shape"].endswith("_mirrored") else (
+            "CGAL" if r["index"] >= 9 * args.n_shapes else r["shape"].rstrip("0123456789").split("_")[0].rstrip("0123456789"))
+        fams.setdefault(fam, []).append(r)
+    for fam, sel in fams.items():
         s = summarise(sel, "planes")
-        lines.append(f"| {v} | {s['shapes']} | {s['precision']:.3f} | {s['recall']:.3f} | {s['count_right']:.3f} |")
+        lines.append(f"| {fam} | {s['shapes']} | {s['precision']:.3f} | {s['recall']:.3f} | {s['count_right']:.3f} | {s['median_cpu_s']:.2f} |")
     bad = [r for r in rows if not r["planes"]["count_right"]]
     lines += ["", "Shapes whose count is wrong (planes): " + ", ".join(
         f"{r['shape']} ({r['variant']}: {r['planes']['found']}/{r['planes']['must']} found, "
