@@ -80,8 +80,12 @@ from torchsym.pointcloud import (
     ReflectionPlaneDetector,
     ReflectionPlaneResult,
     ReflectionPlaneSettings,
+    ReflectionPlanesDetector,
+    ReflectionPlanesResult,
+    ReflectionPlanesSettings,
     add_outliers,
     detect_reflection_plane,
+    detect_reflection_planes,
     planted_symmetric_cloud,
 )
 from torchsym.pointset import PointSymm, PointSymmResult, PointSymmSettings, make_symmetric_pointset, point_symm
@@ -90,6 +94,7 @@ from torchsym.runner import evaluate, read_results, run
 __all__ = [
     # solvers: module, function, result, settings
     "ReflectionPlaneDetector", "detect_reflection_plane", "ReflectionPlaneResult", "ReflectionPlaneSettings",
+    "ReflectionPlanesDetector", "detect_reflection_planes", "ReflectionPlanesResult", "ReflectionPlanesSettings",
     "PointSymm", "point_symm", "PointSymmResult", "PointSymmSettings",
     "IntrinsicSymmetry", "intrinsic_symmetry", "IntrinsicSymmetryResult", "IntrinsicSymmetrySettings",
     "BoundaryCliqueDetector", "boundary_clique_axes", "ReflectionAxesResult", "ReflectionAxesBatch",

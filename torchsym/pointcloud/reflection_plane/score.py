@@ -15,7 +15,7 @@ from torchsym.geometry.reflection import reflect_points
 from torchsym.geometry.sampling import sphere_normals
 from torchsym.matching.knn import KNNIndex
 
-__all__ = ["chance_corrected_score", "mirror_share"]
+__all__ = ["chance_corrected_score", "chance_share", "corrected_share", "mirror_share"]
 
 
 def mirror_share(points: torch.Tensor, dist: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor, tol: float) -> float:
@@ -52,6 +52,16 @@ def chance_corrected_score(
     s = mirror_share(points, dist, normal, offset, tol)
     if n_planes == 0:
         return s
+    return corrected_share(s, chance_share(points, index, tol, generator, n_planes=n_planes, n_probe=n_probe))
+
+
+def chance_share(
+    points: torch.Tensor, index: KNNIndex, tol: float, generator: torch.Generator, *, n_planes: int = 64, n_probe: int = 300
+) -> float:
+    """The highest :func:`mirror_share` among ``n_planes`` random planes (normals on a
+    randomly rotated Fibonacci half sphere, each through the median of the points'
+    projections), measured on ``n_probe`` random points of ``points (N, 3)`` (``index``
+    over them): the chance level of :func:`chance_corrected_score`."""
     probe = points[random_subset(points.shape[0], n_probe, generator)]  # (P, 3)
     q, _ = torch.linalg.qr(torch.randn(3, 3, generator=generator, dtype=torch.float64))
     normals = sphere_normals(n_planes, dtype=torch.float64).to(points) @ q.to(points).T  # (K, 3)
@@ -62,7 +72,12 @@ def chance_corrected_score(
     d = d.reshape(n_planes, -1)  # (K, P)
     off_plane = (probe @ normals.T + offsets).abs().T > tol  # (K, P)
     counts = off_plane.sum(1).clamp_min(1)
-    s0 = float(((d <= tol) & off_plane).sum(1).div(counts).max())
+    return float(((d <= tol) & off_plane).sum(1).div(counts).max())
+
+
+def corrected_share(s: float, s0: float) -> float:
+    """``(s - s0) / (1 - s0)`` clamped to [0, 1] (0 when ``s0 >= 1``): a mirror share
+    ``s`` above the chance level ``s0``."""
     if s0 >= 1.0:
         return 0.0
     return float(min(max((s - s0) / (1.0 - s0), 0.0), 1.0))

@@ -24,6 +24,7 @@ from torchsym.pointcloud.reflection_plane.settings import ReflectionPlaneSetting
 
 __all__ = [
     "RefineContext",
+    "align_start",
     "StartSearch",
     "candidate_starts",
     "is_dominant",
@@ -141,8 +142,9 @@ class StartSearch:
         return [(nk, bk) for _, nk, bk, _ in sorted(self.aligned, key=lambda a: -a[0])[:count]]
 
 
-def _align(nk, bk, ctx: RefineContext, settings: ReflectionPlaneSettings):
-    """One start aligned on the subsample: ``(normal, offset, support, median, steps)``."""
+def align_start(nk, bk, ctx: RefineContext, settings: ReflectionPlaneSettings):
+    """One start ``(normal (3,), offset ())`` aligned on the subsample (pre-alignment, or
+    Algorithm 6 without it): ``(normal, offset, support, median residual, steps)``."""
     if settings.prealign.enabled:
         raw = (nk, bk, *support(ctx.sub, ctx.index, nk, bk, ctx.tol))
         nk, bk, steps = pre_align(
@@ -164,7 +166,7 @@ def _try_starts(starts: list[Plane], search: StartSearch, ctx: RefineContext, se
     or (``starts.confirm``) once a start aligns onto the best plane so far
     (:func:`same_plane` at the inlier tolerance)."""
     for nk, bk in starts:
-        nk, bk, frac, med, steps = _align(nk, bk, ctx, settings)
+        nk, bk, frac, med, steps = align_start(nk, bk, ctx, settings)
         search.aligned.append((frac, nk, bk, steps))
         confirmed = settings.starts.confirm and search.best is not None and same_plane(
             ctx.queries, (nk, bk), search.best[:2], ctx.tol
