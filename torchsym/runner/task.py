@@ -56,13 +56,14 @@ def _error(exc: BaseException) -> dict[str, Any]:
 
 
 def run_task(spec: TaskSpec) -> dict[str, Any]:
-    """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds", "artifacts"}``.
+    """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds", "artifacts", "stages"}``.
 
     ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``, its arrays
     of more than ``spec.max_inline`` elements in ``arrays`` as NumPy arrays and a
     reference in their place) or ``"error"`` (``error`` is ``{"type", "message",
     "where"}``). ``seconds`` is the wall time of reading, building and solving (pictures
-    excluded).
+    excluded); ``stages`` the wall seconds of ``read`` (reading and checking the input),
+    ``solve``, ``record`` (``to_dict``) and ``figures``, for the engine's breakdown.
     """
     import cv2
     import torch
@@ -74,6 +75,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
     out: dict[str, Any] = {
         "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
     }
+    stages = out["stages"] = {}
     t0 = time.perf_counter()
     try:
         for name in spec.imports:
@@ -84,20 +86,24 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         cfg = load_config(spec.config)
         kind, data, cfg = prepare(spec.input, cfg)
         out["kind"] = kind
+        stages["read"] = time.perf_counter() - t0
         result = build_pipeline(cfg)(data)
         out["seconds"] = time.perf_counter() - t0
+        stages["solve"] = out["seconds"] - stages["read"]
         if spec.max_inline is None:
             out["result"] = result.to_dict()
         else:
             sink = ArraySink(spec.max_inline)
             out["result"] = result.to_dict(sink)
             out["arrays"] = sink.arrays
+        stages["record"] = time.perf_counter() - t0 - out["seconds"]
         if spec.figures_dir is not None:
             from torchsym.viz import write_artifacts
 
             folder = Path(spec.figures_dir)
             folder.mkdir(parents=True, exist_ok=True)
             out["artifacts"] = [str(p) for p in write_artifacts(result, data, folder, spec.stem)]
+            stages["figures"] = time.perf_counter() - t0 - out["seconds"] - stages["record"]
         out["status"] = "ok"
     except Exception as exc:  # every exception is the input's final outcome, recorded
         out["seconds"] = time.perf_counter() - t0
