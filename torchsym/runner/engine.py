@@ -289,7 +289,7 @@ class _Starting:
 
     def _say(self) -> None:
         if self.status is not None:
-            self.status(f"workers up {self.live}/{self.expected}" if self.active else "")
+            self.status(f"waiting for workers: {self.live}/{self.expected} threads up" if self.active else "")
 
     def wait(self, done: Any) -> None:
         """Return once ``done`` has a result or every expected worker is up."""
