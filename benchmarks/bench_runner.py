@@ -196,8 +196,9 @@ class Completions:
         self._thread = threading.Thread(target=self._loop, daemon=True)
 
     def _loop(self) -> None:
-        seen = 0
-        while not self._stop.is_set():
+        seen, stop = 0, False
+        while not stop:
+            stop = self._stop.is_set()  # one last count after the run
             n = _count_lines(self.path)
             now = time.perf_counter() - self.t0
             self.times += [now] * (n - seen)
