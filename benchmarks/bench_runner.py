@@ -183,6 +183,20 @@ def machine() -> str:
     return f"{os.cpu_count()} cores ({model}), Python {platform.python_version()}, {platform.system()} {platform.release()}"
 
 
+@contextlib.contextmanager
+def own_environ() -> Any:
+    """Put this process's environment back on leaving: a Dask nanny sets its
+    ``pre-spawn-environ`` (``MALLOC_TRIM_THRESHOLD_``...) in the process that starts it,
+    which a process pool started later would inherit."""
+    saved = dict(os.environ)
+    try:
+        yield
+    finally:
+        for name in set(os.environ) - set(saved):
+            del os.environ[name]
+        os.environ.update(saved)
+
+
 def load() -> float:
     return round(os.getloadavg()[0], 2)
 
@@ -317,8 +331,8 @@ def dask_run(paths: list[str], workers: int) -> dict[str, Any]:
 
     before, results, times = load(), [], []
     t0 = time.perf_counter()
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with own_environ(), LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                     dashboard_address=None, silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         for fut in as_completed(client.map(peer_task, paths, config=CLOUD_CONFIG, pure=False)):
             times.append(time.perf_counter() - t0)
             results.append(fut.result())
@@ -358,8 +372,8 @@ def startup(workers: int) -> dict[str, Any]:
         t1 = time.perf_counter()
     runner_stop = time.perf_counter() - t1
     t0 = time.perf_counter()
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with own_environ(), LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                     dashboard_address=None, silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         client.run(_import_torch)
         plain = time.perf_counter() - t0
     row = {"workers": workers, "floor_s": floor, "runner_s": runner, "runner_first_s": first, "runner_stop_s": runner_stop,

@@ -26,7 +26,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path[:0] = [str(HERE.parent), str(HERE)]
 
-from bench_runner import CLOUD_CONFIG, machine, peer_task  # noqa: E402
+from bench_runner import CLOUD_CONFIG, machine, own_environ, peer_task  # noqa: E402
 from report import write_report  # noqa: E402
 
 FIELDS = ("wall", "cpu", "process_cpu", "faults")
@@ -53,12 +53,10 @@ def on_worker(paths: list[str], warm: str, variant: str) -> list[tuple]:
 
     cfg: dict = {}
     if variant == "no trim":
-        env = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
-        env.pop("MALLOC_TRIM_THRESHOLD_", None)
-        cfg["distributed.nanny.pre-spawn-environ"] = env
+        cfg["distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"] = None  # None: not set
     if variant == "no profiler":
         cfg["distributed.worker.profile.enabled"] = False
-    with dask.config.set(cfg), LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+    with own_environ(), dask.config.set(cfg), LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                                             dashboard_address=None, silence_logs=logging.ERROR) as c, Client(c) as cl:
         if variant == "runner set-up":
             cl.register_plugin(WorkerSetup(1))

@@ -29,6 +29,7 @@ import contextlib
 import dataclasses
 import itertools
 import logging
+import os
 import resource
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -172,7 +173,8 @@ def dask_client(
 
     The local cluster's ``workers`` are started after the set-up is registered and are
     not waited for: each imports torch and torchsym as it joins, all at once, while the
-    client is already in use.
+    client is already in use. This process's environment, which Dask's nannies change,
+    is put back on leaving.
 
     Raises:
         EngineError: the scheduler cannot be reached within ``connect_timeout`` seconds.
@@ -183,6 +185,7 @@ def dask_client(
 
     with contextlib.ExitStack() as stack:
         if engine == "local":
+            stack.callback(_restore_environ, dict(os.environ))
             cluster = stack.enter_context(local_cluster(0, threads))
             client = stack.enter_context(Client(cluster))
             client.register_plugin(WorkerSetup(threads, imports))
@@ -200,6 +203,15 @@ def dask_client(
             client.register_plugin(WorkerSetup(threads, imports))
             logger.info("dask engine on %s: %d workers", where, len(client.scheduler_info()["workers"]))
         yield client
+
+
+def _restore_environ(saved: dict[str, str]) -> None:
+    """Put back this process's environment: a Dask nanny sets its ``pre-spawn-environ``
+    (``MALLOC_TRIM_THRESHOLD_``, ``OMP_NUM_THREADS=1``...) in the process that starts it,
+    where every process started later (a user's process pool) would inherit it."""
+    for name in set(os.environ) - set(saved):
+        del os.environ[name]
+    os.environ.update(saved)
 
 
 def _capacity(client: Any, max_in_flight: int | None, expected: int = 0) -> int:
