@@ -15,11 +15,11 @@ freed memory for reuse and stops Dask's profiler when it joins, before its first
 (:class:`~torchsym.runner.worker.WorkerSetup`). The local cluster's workers start in
 parallel while the first tasks are already submitted: the first worker up starts
 computing. Two tasks per worker thread are in flight (``max_in_flight``), so a
-100,000-input run never builds a large graph and no worker waits for the driver. A worker that dies mid-task makes the scheduler raise ``KilledWorker``
-for the tasks it held (the local cluster is started with ``allowed-failures = 0``); the
-driver runs the task that was running again up to ``retries`` times, then records it as
-``"crashed"``, and resubmits the tasks that were only waiting there uncounted
-(docs/design/runner.md).
+100,000-input run never builds a large graph and no worker waits for the driver. A
+worker that dies mid-task makes the scheduler raise ``KilledWorker`` for the tasks it
+held (the local cluster is started with ``allowed-failures = 0``); the driver runs the
+task that was running again up to ``retries`` times, then records it as ``"crashed"``,
+and resubmits the tasks that were only waiting there uncounted (docs/design/runner.md).
 """
 
 from __future__ import annotations
@@ -150,10 +150,11 @@ def _scheduler_target(address: str | None) -> dict[str, Any]:
 
 def local_cluster(workers: int, threads: int) -> Any:
     """A ``distributed.LocalCluster`` of ``workers`` processes with ``threads`` threads
-    each (0: none yet, ``cluster.scale(n)`` starts them), on loopback, no dashboard, whose scheduler fails a task on its first dead
-    worker (``allowed-failures = 0``: the driver does the retries and counts them) and
-    never moves a task between workers (no work stealing: each worker runs its tasks in
-    submission order, which tells a running task from a waiting one when it dies)."""
+    each (0: none yet, ``cluster.scale(n)`` starts them), on loopback, no dashboard,
+    whose scheduler fails a task on its first dead worker (``allowed-failures = 0``: the
+    driver does the retries and counts them) and never moves a task between workers (no
+    work stealing: each worker runs its tasks in submission order, which tells a running
+    task from a waiting one when it dies)."""
     import dask
     from distributed import LocalCluster
 
