@@ -40,7 +40,7 @@ from torchsym.errors import ConfigError, InputFileError, TorchsymError
 from torchsym.runner.task import TaskSpec, run_task
 
 __all__ = [
-    "BATCH_SECONDS", "ENGINES", "MAX_BATCH", "STAGES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster",
+    "BATCH_SECONDS", "ENGINES", "MAX_BATCH", "QUIET", "STAGES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster",
     "open_engine", "run_batch", "serial_outcomes",
 ]
 
@@ -148,6 +148,17 @@ def _scheduler_target(address: str | None) -> dict[str, Any]:
     return {"address": addr}
 
 
+#: the local cluster's workers check their event loop, memory and system once a second
+#: (Dask: every 20 ms, 100 ms and 500 ms): each wake takes the GIL from the running task;
+#: with them, 0.07-0.13 s of other threads' CPU per cloud on the loaded 2-core machine,
+#: 0.02-0.025 s without (docs/design/runner.md)
+QUIET = {
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "1s",
+}
+
+
 def local_cluster(workers: int, threads: int) -> Any:
     """A ``distributed.LocalCluster`` of ``workers`` processes with ``threads`` threads
     each (0: none yet, ``cluster.scale(n)`` starts them), on loopback, no dashboard,
@@ -174,12 +185,14 @@ def dask_client(
 
     The local cluster's ``workers`` are started after the set-up is registered and are
     not waited for: each imports torch and torchsym as it joins, all at once, while the
-    client is already in use. This process's environment, which Dask's nannies change,
-    is put back on leaving.
+    client is already in use; they wake once a second, not every 20-500 ms, to watch
+    their event loop, memory and system (:data:`QUIET`). This process's environment,
+    which Dask's nannies change, is put back on leaving.
 
     Raises:
         EngineError: the scheduler cannot be reached within ``connect_timeout`` seconds.
     """
+    import dask
     from distributed import Client
 
     from torchsym.runner.worker import WorkerSetup
@@ -187,6 +200,7 @@ def dask_client(
     with contextlib.ExitStack() as stack:
         if engine == "local":
             stack.callback(_restore_environ, dict(os.environ))
+            stack.enter_context(dask.config.set(QUIET))  # while nannies start (and restart) workers
             cluster = stack.enter_context(local_cluster(0, threads))
             client = stack.enter_context(Client(cluster))
             client.register_plugin(WorkerSetup(threads, imports))
