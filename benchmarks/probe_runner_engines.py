@@ -1,7 +1,9 @@
 """Where a task loses time on a Dask worker: the same plane detections in the driver (its
 main thread, a second thread) and on a one-worker ``LocalCluster`` with Dask's defaults,
-without the nanny's ``MALLOC_TRIM_THRESHOLD_``, without the profiler, and with the
-runner's worker set-up (:class:`torchsym.runner.worker.WorkerSetup`), interleaved.
+without the nanny's ``MALLOC_TRIM_THRESHOLD_``, without the profiler, with the runner's
+worker set-up (:class:`torchsym.runner.worker.WorkerSetup`), and with it and the local
+engine's quiet event loop (:data:`torchsym.runner.engine.QUIET`), as the runner's local
+cluster runs them, interleaved.
 
 Each task runs ``torchsym.detect`` on one cloud of ``benchmarks/bench_runner.py``'s set
 with ``configs/pointcloud_plane.yaml`` and one thread, and measures its wall time, its
@@ -56,9 +58,13 @@ def on_worker(paths: list[str], warm: str, variant: str) -> list[tuple]:
         cfg["distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"] = None  # None: not set
     if variant == "no profiler":
         cfg["distributed.worker.profile.enabled"] = False
+    if variant == "runner":
+        from torchsym.runner.engine import QUIET
+
+        cfg.update(QUIET)
     with own_environ(), dask.config.set(cfg), LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                                             dashboard_address=None, silence_logs=logging.ERROR) as c, Client(c) as cl:
-        if variant == "runner set-up":
+        if variant in ("runner set-up", "runner"):
             cl.register_plugin(WorkerSetup(1))
         cl.submit(_task, warm, pure=False).result()
         return [cl.submit(_task, p, pure=False).result() for p in paths]
@@ -82,6 +88,7 @@ def main() -> None:
         "Dask worker, no MALLOC_TRIM_THRESHOLD_": lambda: on_worker(paths, warm, "no trim"),
         "Dask worker, no profiler": lambda: on_worker(paths, warm, "no profiler"),
         "Dask worker, runner set-up": lambda: on_worker(paths, warm, "runner set-up"),
+        "Dask worker, runner set-up and quiet loop (the runner's)": lambda: on_worker(paths, warm, "runner"),
     }
     rows = []
     for rep in range(args.repeats):
