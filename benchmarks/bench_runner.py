@@ -544,11 +544,11 @@ def _markdown(res: dict[str, Any]) -> str:
                      f"{s['runner_stop_s']:.1f} | {s['plain_dask_s']:.1f} | {s['load']} |")
     others = [r for r in res["runs"] if r["dataset"] != "clouds"]
     if others:
-        lines += ["", "The runner's own cost (`no-op`: a solver that does nothing, on tiny clouds; `overhead ms`: wall x "
-                  "workers / n minus the records' mean task seconds) and the 32 dev photos:", "",
+        lines += ["", "The runner's own cost (`no-op`: a solver that does nothing, on tiny clouds; `overhead ms`: workers "
+                  "over the steady rate minus the records' mean task seconds) and the 32 dev photos:", "",
                   "| dataset | engine | workers | n | items/s | with start-up | overhead ms | load |", "|---|---|---|---|---|---|---|---|"]
         for r in others:
-            over = (r["wall_s"] * r["workers"] / r["n"] - r["task_s"]) * 1e3
+            over = (r["workers"] / r["items_per_s"] - r["task_s"]) * 1e3
             lines.append(f"| {r['dataset']} | {r['engine']} | {r['workers']} | {r['n']} | {r['items_per_s']:.2f} | "
                          f"{r['items_per_s_with_startup']:.2f} | {over:.1f} | {r['load']} |")
     k = res.get("killed_worker")
@@ -581,7 +581,14 @@ def main() -> None:
     ap.add_argument("--no-kills", action="store_true", help="leave out the killed worker and driver checks")
     ap.add_argument("--work", default="/tmp/bench_runner")
     ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--report", help="rewrite the Markdown of this JSON of an earlier run, and stop")
     args = ap.parse_args()
+    if args.report:
+        from report import write_report
+
+        res = json.loads(Path(args.report).read_text())
+        write_report(args.out, "runner", _markdown(res), res)
+        return
 
     import dask
     import torch
