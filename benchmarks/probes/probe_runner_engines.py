@@ -1,103 +1,119 @@
-"""What two workers can give on this machine: the same plane detections serially, on a
-plain 2-process pool and on a plain 2-worker Dask ``LocalCluster`` (no runner), interleaved.
+"""Where a task loses time on a Dask worker: the same plane detections in the driver (its
+main thread, a second thread) and on a one-worker ``LocalCluster`` with Dask's defaults,
+without the nanny's ``MALLOC_TRIM_THRESHOLD_``, without the profiler, with the runner's
+worker set-up (:class:`torchsym.runner.worker.WorkerSetup`), and with it and the local
+engine's quiet event loop (:data:`torchsym.runner.engine.QUIET`), as the runner's local
+cluster runs them, interleaved.
 
-Each task reads one cloud of ``benchmarks/bench_runner.py``'s set and runs
-``torchsym.detect`` on it with one thread (torch, BLAS, OpenMP); it returns its own
-seconds. Items per second leave out the start-up (one warm-up task per worker). The pool
-is the bound of two independent processes; Dask is the engine the runner is built on
-(docs/design/runner.md), so the runner's speed-up is compared with these.
+Each task runs ``torchsym.detect`` on one cloud of ``benchmarks/bench_runner.py``'s set
+with ``configs/pointcloud_plane.yaml`` and one thread, and measures its wall time, its
+thread's CPU time, its whole process's CPU time meanwhile (a worker's event loop and
+profiler included) and its thread's minor page faults. CPU time and page faults depend
+far less on the machine's load than wall time, which is why they are the figures to
+read on a shared machine. Medians over ``--n`` clouds after one warm-up task.
 
-Usage: python benchmarks/probes/probe_runner_engines.py [--work /tmp/bench_runner] [--n 40] [--repeats 3]
+Usage: python benchmarks/probes/probe_runner_engines.py [--work /tmp/bench_runner] [--n 12] [--repeats 2]
 """
 
 from __future__ import annotations
 
 import argparse
-import multiprocessing as mp
+import logging
 import os
 import statistics
 import sys
-import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import numpy as np
+HERE = Path(__file__).resolve().parent
+sys.path[:0] = [str(HERE.parent), str(HERE)]
 
-HERE = Path(__file__).resolve().parents[1]  # benchmarks/
-sys.path.insert(0, str(HERE))
-from report import write_report  # noqa: E402 -- benchmarks/report.py
+from bench_runner import CLOUD_CONFIG, machine, own_environ, peer_task  # noqa: E402
+from report import write_report  # noqa: E402
 
-
-def task(path: str) -> float:
-    import torch
-    from threadpoolctl import threadpool_limits
-
-    import torchsym
-
-    torch.set_num_threads(1)
-    with threadpool_limits(1):
-        t = time.perf_counter()
-        torchsym.detect(torch.from_numpy(np.load(path)))
-        return time.perf_counter() - t
+FIELDS = ("wall", "cpu", "process_cpu", "faults")
 
 
-def serial(paths: list[str], warm: str) -> tuple[float, float]:
-    task(warm)
-    t = time.perf_counter()
-    r = [task(p) for p in paths]
-    return len(paths) / (time.perf_counter() - t), statistics.mean(r)
+def _task(path: str) -> tuple[float, float, float, int]:
+    return peer_task(path, CLOUD_CONFIG)
 
 
-def pool(paths: list[str], warm: str) -> tuple[float, float]:
-    with mp.get_context("spawn").Pool(2) as p:
-        p.map(task, [warm, warm], chunksize=1)
-        t = time.perf_counter()
-        r = p.map(task, paths, chunksize=1)
-        return len(paths) / (time.perf_counter() - t), statistics.mean(r)
+def in_driver(paths: list[str], warm: str, thread: bool) -> list[tuple]:
+    if not thread:
+        _task(warm)
+        return [_task(p) for p in paths]
+    with ThreadPoolExecutor(1) as ex:
+        ex.submit(_task, warm).result()
+        return list(ex.map(_task, paths))
 
 
-def dask_local(paths: list[str], warm: str) -> tuple[float, float]:
+def on_worker(paths: list[str], warm: str, variant: str) -> list[tuple]:
+    import dask
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c, Client(c) as cl:
-        cl.gather(cl.map(task, [warm, warm], pure=False))
-        t = time.perf_counter()
-        r = cl.gather(cl.map(task, paths, pure=False))
-        return len(paths) / (time.perf_counter() - t), statistics.mean(r)
+    from torchsym.runner.worker import WorkerSetup
+
+    cfg: dict = {}
+    if variant == "no trim":
+        cfg["distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"] = None  # None: not set
+    if variant == "no profiler":
+        cfg["distributed.worker.profile.enabled"] = False
+    if variant == "runner":
+        from torchsym.runner.engine import QUIET
+
+        cfg.update(QUIET)
+    with own_environ(), dask.config.set(cfg), LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                            dashboard_address=None, silence_logs=logging.ERROR) as c, Client(c) as cl:
+        if variant in ("runner set-up", "runner"):
+            cl.register_plugin(WorkerSetup(1))
+        cl.submit(_task, warm, pure=False).result()
+        return [cl.submit(_task, p, pure=False).result() for p in paths]
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default="/tmp/bench_runner")
-    ap.add_argument("--n", type=int, default=40)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--n", type=int, default=12)
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--out", default=str(HERE.parent / "results"))
     args = ap.parse_args()
     clouds = sorted(str(p) for p in (Path(args.work) / "clouds").glob("*.npy"))
     if len(clouds) < args.n + 1:
         raise SystemExit(f"run benchmarks/bench_runner.py first: {args.work}/clouds holds {len(clouds)} clouds")
     warm, paths = clouds[0], clouds[1 : args.n + 1]
-    engines = {"serial": serial, "process pool (2)": pool, "Dask LocalCluster (2)": dask_local}
-    runs: dict[str, list[tuple[float, float]]] = {k: [] for k in engines}
+    variants = {
+        "driver, main thread": lambda: in_driver(paths, warm, False),
+        "driver, second thread": lambda: in_driver(paths, warm, True),
+        "Dask worker, Dask's defaults": lambda: on_worker(paths, warm, "defaults"),
+        "Dask worker, no MALLOC_TRIM_THRESHOLD_": lambda: on_worker(paths, warm, "no trim"),
+        "Dask worker, no profiler": lambda: on_worker(paths, warm, "no profiler"),
+        "Dask worker, runner set-up": lambda: on_worker(paths, warm, "runner set-up"),
+        "Dask worker, runner set-up and quiet loop (the runner's)": lambda: on_worker(paths, warm, "runner"),
+    }
+    rows = []
     for rep in range(args.repeats):
-        for name, fn in engines.items():
-            runs[name].append(fn(paths, warm))
-            print(f"{rep} {name}: {runs[name][-1][0]:.2f} items/s, task {runs[name][-1][1]:.3f} s", flush=True)
-    base = statistics.mean(x[0] for x in runs["serial"])
+        for name, fn in variants.items():
+            load = round(os.getloadavg()[0], 2)
+            res = fn()
+            med = {k: statistics.median(r[i] for r in res) for i, k in enumerate(FIELDS)}
+            rows.append({"round": rep, "variant": name, "load": load, **med})
+            print(f"{rep} {name:40s} wall {med['wall']:.3f} cpu {med['cpu']:.3f} process {med['process_cpu']:.3f} "
+                  f"faults {med['faults']:.0f} load {load}", flush=True)
     lines = [
-        "# Two workers on this machine: serial, a plain process pool, plain Dask (no runner)",
+        "# Where a task loses time on a Dask worker",
         "",
-        f"`python benchmarks/probes/probe_runner_engines.py --n {args.n} --repeats {args.repeats}`: {args.n} clouds of "
-        f"`bench_runner.py` (plane detection, 1 thread), the three engines interleaved {args.repeats} times; "
-        f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at the end.",
+        f"`python benchmarks/probe_runner_engines.py --n {args.n} --repeats {args.repeats}`: {args.n} clouds of "
+        f"`bench_runner.py` (plane detection, `configs/pointcloud_plane.yaml`, 1 thread), medians per task; {machine()}; "
+        "`load`: 1-minute load average before each row. `cpu`: the task thread's CPU s; `process cpu`: the whole "
+        "process's meanwhile (a worker's event loop and profiler included); `faults`: the task thread's minor page faults.",
         "",
-        "| engine | items/s per repeat | mean | x serial | mean task s |",
-        "|---|---|---|---|---|",
+        "| round | where | wall s | cpu s | process cpu s | faults | load |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for name, r in runs.items():
-        ips = [x[0] for x in r]
-        lines.append(f"| {name} | {', '.join(f'{v:.2f}' for v in ips)} | {statistics.mean(ips):.2f} | "
-                     f"{statistics.mean(ips) / base:.2f}x | {statistics.mean(x[1] for x in r):.3f} |")
-    write_report(args.out, "runner_engines", "\n".join(lines) + "\n", {"args": vars(args), "runs": runs})
+    for r in rows:
+        lines.append(f"| {r['round']} | {r['variant']} | {r['wall']:.3f} | {r['cpu']:.3f} | {r['process_cpu']:.3f} | "
+                     f"{r['faults']:.0f} | {r['load']} |")
+    write_report(args.out, "runner_engines", "\n".join(lines) + "\n", {"args": vars(args), "rows": rows})
 
 
 if __name__ == "__main__":

@@ -56,6 +56,8 @@ class TestLocalCluster:
         summary = run(probe_config(markers), str(folder), out, engine="local", workers=2, retries=1, imports=[PROBE])
         assert (summary.n_ok, summary.n_crashed) == (23, 1)
         assert any(r.message.startswith("batch of ") for r in caplog.records)  # inputs did share tasks
+        (stages,) = [r for r in caplog.records if hasattr(r, "stages")]  # timed on the workers, finished inputs only
+        assert stages.n == 23 and stages.stages["cpu"] > 0 and stages.stages["wait"] > 0
         rec = _by_name(out)
         assert rec["c20.xyz"]["status"] == "crashed" and rec["c20.xyz"]["attempts"] == 2
         assert {r["attempts"] for name, r in rec.items() if name != "c20.xyz"} == {1}

@@ -188,7 +188,7 @@ def run(
         skipped = len(sources) - len(specs)
         with _progress(len(sources), skipped, progress) as bar, open_engine(
             chosen, specs, address=address, workers=workers, threads=threads, imports=imports,
-            retries=retries, max_in_flight=max_in_flight, connect_timeout=connect_timeout,
+            retries=retries, max_in_flight=max_in_flight, connect_timeout=connect_timeout, status=bar.set_description_str,
         ) as (outcomes, engine_seconds):
             for spec, outcome, attempts in outcomes:
                 store.append(_record(store, keys[spec.index], outcome, attempts))

@@ -10,14 +10,16 @@ Three engines give the same records (only where a task runs changes):
   ``scheduler.json`` file) or by ``DASK_SCHEDULER_ADDRESS``; SLURM/PBS clusters through
   ``dask-jobqueue``.
 
-Each worker sets ``torch.set_num_threads(threads_per_worker)`` and imports torchsym when
-it starts (:class:`~torchsym.runner.worker.WorkerSetup`). Two tasks per live worker thread are in
-flight (``max_in_flight``), so a 100,000-input run never builds a large graph and no worker
-waits for the driver. A worker that dies mid-task makes the scheduler raise ``KilledWorker``
-for the tasks it held (the local cluster is started with ``allowed-failures = 0``); the
-driver runs the task that was running again up to ``retries`` times, then records it as
-``"crashed"``, and resubmits the tasks that were only waiting there uncounted
-(docs/design/runner.md).
+Each worker sets ``torch.set_num_threads(threads_per_worker)``, imports torchsym, keeps
+freed memory for reuse and stops Dask's profiler when it joins, before its first task
+(:class:`~torchsym.runner.worker.WorkerSetup`). The local cluster's workers start in
+parallel while the first tasks are already submitted: the first worker up starts
+computing. Two tasks per worker thread are in flight (``max_in_flight``), so a
+100,000-input run never builds a large graph and no worker waits for the driver. A
+worker that dies mid-task makes the scheduler raise ``KilledWorker`` for the tasks it
+held (the local cluster is started with ``allowed-failures = 0``); the driver runs the
+task that was running again up to ``retries`` times, then records it as ``"crashed"``,
+and resubmits the tasks that were only waiting there uncounted (docs/design/runner.md).
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ import contextlib
 import dataclasses
 import itertools
 import logging
+import os
+import resource
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,8 +40,8 @@ from torchsym.errors import ConfigError, InputFileError, TorchsymError
 from torchsym.runner.task import TaskSpec, run_task
 
 __all__ = [
-    "BATCH_SECONDS", "ENGINES", "MAX_BATCH", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster", "open_engine",
-    "run_batch", "serial_outcomes",
+    "BATCH_SECONDS", "ENGINES", "MAX_BATCH", "QUIET", "STAGES", "EngineError", "Outcome", "dask_client", "dask_outcomes", "local_cluster",
+    "open_engine", "run_batch", "serial_outcomes",
 ]
 
 logger = logging.getLogger(__name__)
@@ -64,21 +68,67 @@ def _crashed(attempts: int, exc: BaseException) -> dict[str, Any]:
     }
 
 
+#: the breakdown an engine logs at the end of a run (``extra={"stages": {...}}``), seconds
+#: (``faults``: minor page faults) per input: on the worker, ``read``, ``solve``,
+#: ``record`` and ``figures`` (:func:`~torchsym.runner.task.run_task`), ``cpu`` (CPU
+#: time of the task's thread), ``process_cpu`` (of the whole worker process meanwhile:
+#: its other threads included); in the driver, ``wait`` (for a result), ``submit`` and
+#: ``handle`` (the driver's own work on a result: writing its arrays and record)
+STAGES = ("read", "solve", "record", "figures", "cpu", "process_cpu", "faults", "wait", "submit", "handle")
+
+_RUSAGE_THREAD = getattr(resource, "RUSAGE_THREAD", resource.RUSAGE_SELF)
+
+
+def _usage() -> tuple[float, float, int]:
+    """(thread CPU s, process CPU s, minor page faults of the thread)."""
+    proc = resource.getrusage(resource.RUSAGE_SELF)
+    return time.thread_time(), proc.ru_utime + proc.ru_stime, resource.getrusage(_RUSAGE_THREAD).ru_minflt
+
+
+def _timed_task(spec: TaskSpec) -> dict[str, Any]:
+    """:func:`run_task` with its thread's CPU time, its process's and its page faults in ``stages``."""
+    before = _usage()
+    out = run_task(spec)
+    after = _usage()
+    out.setdefault("stages", {}).update(cpu=after[0] - before[0], process_cpu=after[1] - before[1], faults=after[2] - before[2])
+    return out
+
+
+def _log_stages(engine: str, stages: collections.Counter[str], n: int) -> None:
+    if n:
+        per = {k: stages[k] / n for k in STAGES}
+        logger.info(
+            "%s engine, per input (%d): worker read %.1f ms, solve %.1f ms, record %.1f ms, figures %.1f ms, cpu %.1f ms "
+            "(process %.1f ms), %.0f page faults; driver waiting %.1f ms, submitting %.1f ms, handling %.1f ms",
+            engine, n, *(1e3 * per[k] for k in STAGES[:6]), per["faults"], *(1e3 * per[k] for k in STAGES[7:]),
+            extra={"stages": per, "n": n},
+        )
+
+
 def serial_outcomes(specs: Sequence[TaskSpec], threads: int) -> Iterator[Outcome]:
     """Run ``specs`` one after another in this process, torch, OpenCV, BLAS and OpenMP limited
-    to ``threads`` threads as on a worker (the results do not depend on the engine)."""
+    to ``threads`` threads as on a worker (the results do not depend on the engine); logs
+    the :data:`STAGES` at the end."""
     import cv2
     import torch
     from threadpoolctl import threadpool_limits
 
     before = torch.get_num_threads(), cv2.getNumThreads()
+    stages: collections.Counter[str] = collections.Counter()
+    n = 0
     try:
         with threadpool_limits(threads):  # BLAS and OpenMP as on a worker
             for spec in specs:
-                yield spec, run_task(spec), 1
+                outcome = _timed_task(spec)
+                stages.update(outcome["stages"])
+                n += 1
+                t = time.perf_counter()
+                yield spec, outcome, 1
+                stages["handle"] += time.perf_counter() - t
     finally:
         torch.set_num_threads(before[0])
         cv2.setNumThreads(before[1])
+        _log_stages("serial", stages, n)
 
 
 def _scheduler_target(address: str | None) -> dict[str, Any]:
@@ -98,12 +148,24 @@ def _scheduler_target(address: str | None) -> dict[str, Any]:
     return {"address": addr}
 
 
+#: the local cluster's workers check their event loop, memory and system once a second
+#: (Dask: every 20 ms, 100 ms and 500 ms): each wake takes the GIL from the running task;
+#: with them, 0.07-0.13 s of other threads' CPU per cloud on the loaded 2-core machine,
+#: 0.02-0.025 s without (docs/design/runner.md)
+QUIET = {
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "1s",
+}
+
+
 def local_cluster(workers: int, threads: int) -> Any:
     """A ``distributed.LocalCluster`` of ``workers`` processes with ``threads`` threads
-    each, on loopback, no dashboard, whose scheduler fails a task on its first dead
-    worker (``allowed-failures = 0``: the driver does the retries and counts them) and
-    never moves a task between workers (no work stealing: each worker runs its tasks in
-    submission order, which tells a running task from a waiting one when it dies)."""
+    each (0: none yet, ``cluster.scale(n)`` starts them), on loopback, no dashboard,
+    whose scheduler fails a task on its first dead worker (``allowed-failures = 0``: the
+    driver does the retries and counts them) and never moves a task between workers (no
+    work stealing: each worker runs its tasks in submission order, which tells a running
+    task from a waiting one when it dies)."""
     import dask
     from distributed import LocalCluster
 
@@ -121,19 +183,29 @@ def dask_client(
     """A ``distributed.Client`` on a fresh ``LocalCluster`` (``engine="local"``) or on the
     scheduler at ``address`` (``engine="dask"``), with :class:`~torchsym.runner.worker.WorkerSetup` registered.
 
+    The local cluster's ``workers`` are started after the set-up is registered and are
+    not waited for: each imports torch and torchsym as it joins, all at once, while the
+    client is already in use; they wake once a second, not every 20-500 ms, to watch
+    their event loop, memory and system (:data:`QUIET`). This process's environment,
+    which Dask's nannies change, is put back on leaving.
+
     Raises:
         EngineError: the scheduler cannot be reached within ``connect_timeout`` seconds.
     """
+    import dask
     from distributed import Client
 
     from torchsym.runner.worker import WorkerSetup
 
-    stack = contextlib.ExitStack()
-    with stack:
+    with contextlib.ExitStack() as stack:
         if engine == "local":
-            cluster = stack.enter_context(local_cluster(workers, threads))
+            stack.callback(_restore_environ, dict(os.environ))
+            stack.enter_context(dask.config.set(QUIET))  # while nannies start (and restart) workers
+            cluster = stack.enter_context(local_cluster(0, threads))
             client = stack.enter_context(Client(cluster))
-            where = "a local cluster"
+            client.register_plugin(WorkerSetup(threads, imports))
+            cluster.scale(workers)
+            logger.info("dask engine on a local cluster: starting %d workers", workers)
         else:
             target = _scheduler_target(address)
             where = next(iter(target.values()))
@@ -143,15 +215,25 @@ def dask_client(
                 raise EngineError(
                     f"--address: cannot reach the Dask scheduler at {where!r} within {connect_timeout:g} s ({exc})"
                 ) from None
-        client.register_plugin(WorkerSetup(threads, imports))
-        logger.info("dask engine on %s: %d workers", where, len(client.scheduler_info()["workers"]))
+            client.register_plugin(WorkerSetup(threads, imports))
+            logger.info("dask engine on %s: %d workers", where, len(client.scheduler_info()["workers"]))
         yield client
 
 
-def _capacity(client: Any, max_in_flight: int | None) -> int:
-    """Tasks to keep in flight: ``max_in_flight``, or two per live worker thread (one
-    running, one waiting on the worker, so a worker never waits for the driver)."""
-    live = sum(client.nthreads().values())
+def _restore_environ(saved: dict[str, str]) -> None:
+    """Put back this process's environment: a Dask nanny sets its ``pre-spawn-environ``
+    (``MALLOC_TRIM_THRESHOLD_``, ``OMP_NUM_THREADS=1``...) in the process that starts it,
+    where every process started later (a user's process pool) would inherit it."""
+    for name in set(os.environ) - set(saved):
+        del os.environ[name]
+    os.environ.update(saved)
+
+
+def _capacity(client: Any, max_in_flight: int | None, expected: int = 0) -> int:
+    """Tasks to keep in flight: ``max_in_flight``, or two per worker thread, live or
+    ``expected`` (one running, one waiting on the worker, so a worker never waits for
+    the driver)."""
+    live = max(sum(client.nthreads().values()), expected)
     return 2 * live if max_in_flight is None or live == 0 else max_in_flight
 
 
@@ -206,9 +288,10 @@ class _Flying:
 
 def run_batch(specs: Sequence[TaskSpec]) -> tuple[list[dict[str, Any]], float]:
     """:func:`~torchsym.runner.task.run_task` on each spec in turn (one Dask task); returns
-    the outcomes and the batch's wall seconds (pictures included, which size the batches)."""
+    the outcomes (with the task's CPU time and page faults in their ``stages``) and the
+    batch's wall seconds (pictures included, which size the batches)."""
     t0 = time.perf_counter()
-    return [run_task(spec) for spec in specs], time.perf_counter() - t0
+    return [_timed_task(spec) for spec in specs], time.perf_counter() - t0
 
 
 def _take(queue: collections.deque[_Item], size: int) -> tuple[_Item, ...]:
@@ -220,14 +303,59 @@ def _take(queue: collections.deque[_Item], size: int) -> tuple[_Item, ...]:
     return tuple(items)
 
 
-def dask_outcomes(
-    client: Any, specs: Sequence[TaskSpec], *, retries: int, max_in_flight: int | None = None, wait_workers: float = 600.0
-) -> Iterator[Outcome]:
-    """Run ``specs`` on ``client``'s workers, yielding each input's outcome as it completes.
+class _Starting:
+    """The workers of a cluster still starting: counted at most every 0.25 s while the
+    driver waits, told to ``status``; no worker within ``wait_workers`` s is an error."""
 
-    Two tasks per live worker thread are in flight, or ``max_in_flight``: one running and
-    one waiting on the worker, so a worker starts its next task without waiting for the
-    driver. Inputs shorter than ``BATCH_SECONDS`` (by the mean so far) share a task, up to
+    def __init__(self, client: Any, expected: int, status: Callable[[str], Any] | None, wait_workers: float) -> None:
+        self.client, self.expected, self.status, self.wait_workers = client, expected, status, wait_workers
+        self.t0 = self.checked = time.perf_counter()
+        self.live = sum(client.nthreads().values()) if expected else 0
+        self.active = self.live < expected
+        self._say()
+
+    def _say(self) -> None:
+        if self.status is not None:
+            self.status(f"waiting for workers: {self.live}/{self.expected} threads up" if self.active else "")
+
+    def wait(self, done: Any) -> None:
+        """Return once ``done`` has a result or every expected worker is up."""
+        while self.active and not done.has_ready():
+            time.sleep(0.02)
+            now = time.perf_counter()
+            if now - self.checked < 0.25:
+                continue
+            self.checked = now
+            self.live = sum(self.client.nthreads().values())
+            self.active = self.live < self.expected
+            self._say()
+            if self.live == 0 and now - self.t0 > self.wait_workers:
+                raise EngineError(f"engine: no Dask worker started within {self.wait_workers:g} s")
+
+    def done(self) -> None:
+        if self.active:
+            self.active = False
+            self._say()
+
+
+def dask_outcomes(
+    client: Any,
+    specs: Sequence[TaskSpec],
+    *,
+    retries: int,
+    max_in_flight: int | None = None,
+    wait_workers: float = 600.0,
+    expected: int = 0,
+    status: Callable[[str], Any] | None = None,
+) -> Iterator[Outcome]:
+    """Run ``specs`` on ``client``'s workers, yielding each input's outcome as it completes;
+    logs the :data:`STAGES` at the end.
+
+    Two tasks per worker thread are in flight, live or ``expected`` (the threads of
+    workers still starting), or ``max_in_flight``: one running and one waiting on the
+    worker, so a worker starts its next task without waiting for the driver. Until
+    ``expected`` threads are up, ``status`` (if given) is told how many are. Inputs
+    shorter than ``BATCH_SECONDS`` (by the mean so far) share a task, up to
     ``MAX_BATCH`` of them, so Dask's cost per task is paid once per batch.
 
     The scheduler fails every task a dying worker held, running or waiting
@@ -251,61 +379,79 @@ def dask_outcomes(
     done = as_completed(with_results=True, raise_errors=False)
     token = f"{time.time_ns():x}"
     order = itertools.count()
-    capacity = full = _capacity(client, max_in_flight)
+    capacity = full = _capacity(client, max_in_flight, expected)
     size, seconds, finished = 1, 0.0, 0
-    while queue or flying:
-        while queue and len(flying) < capacity:
-            items = _take(queue, size)
-            n = next(order)
-            specs_n = [item[0] for item in items]
-            fut = client.submit(run_batch, specs_n, key=f"torchsym-{token}-{specs_n[0].index}-{n}", pure=False, retries=0, priority=-n)
-            flying[fut.key] = _Flying(items, n, fut)
-            done.add(fut)
-            if len(items) > 1:
-                logger.debug("batch of %d inputs in task %s", len(items), fut.key)
-        if not flying:  # every worker is gone: wait for one (a nanny restarts them)
-            try:
-                client.wait_for_workers(1, timeout=wait_workers)
-            except TimeoutError:
-                raise EngineError(f"engine: no Dask worker for {wait_workers:g} s; {len(queue)} inputs left") from None
-            capacity = _capacity(client, max_in_flight)
-            continue
-        fut, value = next(done)  # the result is gathered in the background
-        if fut.key not in flying:  # already handled with the worker death that took it
+    stages: collections.Counter[str] = collections.Counter()
+    starting = _Starting(client, expected, status, wait_workers)
+
+    def handled(outcome: Outcome) -> Iterator[Outcome]:
+        t = time.perf_counter()
+        yield outcome
+        stages["handle"] += time.perf_counter() - t
+
+    try:
+        while queue or flying:
+            t = time.perf_counter()
+            while queue and len(flying) < capacity:
+                items = _take(queue, size)
+                n = next(order)
+                specs_n = [item[0] for item in items]
+                fut = client.submit(run_batch, specs_n, key=f"torchsym-{token}-{specs_n[0].index}-{n}", pure=False, retries=0, priority=-n)
+                flying[fut.key] = _Flying(items, n, fut)
+                done.add(fut)
+                if len(items) > 1:
+                    logger.debug("batch of %d inputs in task %s", len(items), fut.key)
+            t1 = time.perf_counter()
+            stages["submit"] += t1 - t
+            if not flying:  # every worker is gone: wait for one (a nanny restarts them)
+                try:
+                    client.wait_for_workers(1, timeout=wait_workers)
+                except TimeoutError:
+                    raise EngineError(f"engine: no Dask worker for {wait_workers:g} s; {len(queue)} inputs left") from None
+                capacity = _capacity(client, max_in_flight)
+                continue
+            starting.wait(done)
+            fut, value = next(done)  # the result is gathered in the background
+            stages["wait"] += time.perf_counter() - t1
+            if fut.key not in flying:  # already handled with the worker death that took it
+                fut.release()
+                continue
+            exc = None if fut.status == "finished" else (value[1] if isinstance(value, tuple) else value)
+            if isinstance(exc, KilledWorker) or capacity < full:
+                capacity = _capacity(client, max_in_flight)
+                full = max(full, capacity)
+            if isinstance(exc, KilledWorker):
+                for task, ran in reversed(_killed_with(fut, exc, flying)):
+                    for spec, attempt, alone in reversed(task.items):
+                        if not ran:
+                            queue.appendleft((spec, attempt, alone))
+                        elif len(task.items) > 1:
+                            queue.appendleft((spec, attempt, True))
+                        elif attempt <= retries:
+                            logger.warning("%s: its worker died (attempt %d); to run again", spec.input, attempt)
+                            queue.appendleft((spec, attempt + 1, True))
+                        else:
+                            yield from handled((spec, _crashed(attempt, task.future.exception()), attempt))
+                fut.release()
+                continue
+            task = flying.pop(fut.key)
             fut.release()
-            continue
-        exc = None if fut.status == "finished" else (value[1] if isinstance(value, tuple) else value)
-        if isinstance(exc, KilledWorker) or capacity < full:
-            capacity = _capacity(client, max_in_flight)
-            full = max(full, capacity)
-        if isinstance(exc, KilledWorker):
-            for task, ran in reversed(_killed_with(fut, exc, flying)):
-                for spec, attempt, alone in reversed(task.items):
-                    if not ran:
-                        queue.appendleft((spec, attempt, alone))
-                    elif len(task.items) > 1:
-                        queue.appendleft((spec, attempt, True))
-                    elif attempt <= retries:
-                        logger.warning("%s: its worker died (attempt %d); to run again", spec.input, attempt)
-                        queue.appendleft((spec, attempt + 1, True))
-                    else:
-                        yield spec, _crashed(attempt, task.future.exception()), attempt
-            fut.release()
-            continue
-        task = flying.pop(fut.key)
-        fut.release()
-        if exc is not None and len(task.items) > 1:  # a batch failed outside its inputs: each runs alone
-            queue.extendleft((spec, attempt, True) for spec, attempt, _ in reversed(task.items))
-            continue
-        if exc is not None:  # the task's result could not come back (an error comes as (type, exc, tb))
-            yield task.items[0][0], _error_outcome(exc), task.items[0][1]
-            continue
-        outcomes, wall = value
-        seconds += wall
-        finished += len(outcomes)
-        size = max(1, min(MAX_BATCH, int(BATCH_SECONDS * finished / max(seconds, 1e-6))))
-        for (spec, attempt, _), outcome in zip(task.items, outcomes, strict=True):
-            yield spec, outcome, attempt
+            if exc is not None and len(task.items) > 1:  # a batch failed outside its inputs: each runs alone
+                queue.extendleft((spec, attempt, True) for spec, attempt, _ in reversed(task.items))
+                continue
+            if exc is not None:  # the task's result could not come back (an error comes as (type, exc, tb))
+                yield from handled((task.items[0][0], _error_outcome(exc), task.items[0][1]))
+                continue
+            outcomes, wall = value
+            seconds += wall
+            finished += len(outcomes)
+            size = max(1, min(MAX_BATCH, int(BATCH_SECONDS * finished / max(seconds, 1e-6))))
+            for (spec, attempt, _), outcome in zip(task.items, outcomes, strict=True):
+                stages.update(outcome.get("stages", {}))
+                yield from handled((spec, outcome, attempt))
+    finally:
+        starting.done()
+        _log_stages("dask", stages, finished)
 
 
 @contextlib.contextmanager
@@ -320,14 +466,19 @@ def open_engine(
     retries: int,
     max_in_flight: int | None,
     connect_timeout: float,
+    status: Callable[[str], Any] | None = None,
 ) -> Iterator[tuple[Iterator[Outcome], float]]:
     """``(outcomes, start-up seconds)`` of ``specs`` on ``engine`` (``"serial"``,
     ``"local"`` or ``"dask"``); the cluster, if any, is stopped on leaving. Nothing is
-    started when ``specs`` is empty."""
+    started when ``specs`` is empty. The local cluster's workers are not waited for
+    (:func:`dask_client`): the start-up seconds are the scheduler's, and ``status``
+    is told how many workers are up until all are (:func:`dask_outcomes`)."""
     if engine == "serial" or not specs:
         yield serial_outcomes(specs, threads), 0.0
         return
     t0 = time.perf_counter()
     with dask_client(engine, address=address, workers=workers, threads=threads, imports=imports,
                      connect_timeout=connect_timeout) as client:
-        yield dask_outcomes(client, specs, retries=retries, max_in_flight=max_in_flight), time.perf_counter() - t0
+        expected = workers * threads if engine == "local" else 0
+        yield (dask_outcomes(client, specs, retries=retries, max_in_flight=max_in_flight, expected=expected, status=status),
+               time.perf_counter() - t0)

@@ -66,8 +66,8 @@ def _error(exc: BaseException) -> dict[str, Any]:
 
 def run_task(spec: TaskSpec) -> dict[str, Any]:
     """Run one input; returns ``{"status", "kind", "result", "arrays", "error", "seconds",
-    "artifacts", "notes", "config"}``: the one way torchsym runs an input from files, for
-    ``torchsym detect`` (in its process) and ``torchsym run`` (on any engine).
+    "artifacts", "notes", "config", "stages"}``: the one way torchsym runs an input from
+    files, for ``torchsym detect`` (in its process) and ``torchsym run`` (on any engine).
 
     ``status`` is ``"ok"`` (``result`` is the solver result's ``to_dict()``, its arrays
     of more than ``spec.max_inline`` elements in ``arrays`` as NumPy arrays and a
@@ -75,7 +75,9 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
     "where"}``). ``seconds`` is the wall time of reading, building and solving (pictures
     excluded). ``notes`` say what :func:`torchsym.api.prepare` decided (files skipped, a
     mesh sampled on its surface, the pipeline chosen for it); ``config`` is the pipeline
-    run, as :meth:`PipelineConfig.to_dict` gives it.
+    run, as :meth:`PipelineConfig.to_dict` gives it; ``stages`` the wall seconds of
+    ``read`` (reading and checking the input), ``solve``, ``record`` (``to_dict``) and
+    ``figures``, for the engine's breakdown.
     """
     import cv2
     import torch
@@ -88,6 +90,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
         "notes": [], "config": None,
     }
+    stages = out["stages"] = {}
     t0 = time.perf_counter()
     try:
         for name in spec.imports:
@@ -100,21 +103,25 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         cfg = load_config(spec.config) if spec.config is not None else None
         prepared = prepare(source, cfg, kind=spec.kind, overrides=spec.overrides)
         out["kind"], out["notes"], out["config"] = prepared.kind, list(prepared.notes), prepared.config.to_dict()
+        stages["read"] = time.perf_counter() - t0
         result = solve(prepared)
         data = prepared.data
         out["seconds"] = time.perf_counter() - t0
+        stages["solve"] = out["seconds"] - stages["read"]
         if spec.max_inline is None:
             out["result"] = result.to_dict()
         else:
             sink = ArraySink(spec.max_inline)
             out["result"] = result.to_dict(sink)
             out["arrays"] = sink.arrays
+        stages["record"] = time.perf_counter() - t0 - out["seconds"]
         if spec.figures_dir is not None:
             from torchsym.viz import write_artifacts
 
             folder = Path(spec.figures_dir)
             folder.mkdir(parents=True, exist_ok=True)
             out["artifacts"] = [str(p) for p in write_artifacts(result, data, folder, spec.stem)]
+            stages["figures"] = time.perf_counter() - t0 - out["seconds"] - stages["record"]
         out["status"] = "ok"
     except Exception as exc:  # every exception is the input's final outcome, recorded
         out["seconds"] = time.perf_counter() - t0
