@@ -58,14 +58,15 @@ def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float
 
 
 def stage_axes(image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """The accepted axes of :func:`torchsym.image.axes.image_axes` on ``image (1, C, H, W)``:
-    ``(lines (A, 3), pairs)`` with ``pairs`` one ``(M_a, 4)`` tensor of each axis's
-    supporting pairs (boundary and mirrored-SIFT), in ``image``'s pixels."""
+    """The accepted axes of :func:`torchsym.image.axes.image_axes` on ``image (1, C, H, W)``
+    (the best-ranked one when none is accepted: a map is asked for): ``(lines (A, 3), pairs)``
+    with ``pairs`` one ``(M_a, 4)`` tensor of each axis's supporting pairs (boundary and
+    mirrored-SIFT), in ``image``'s pixels."""
     from torchsym.image.axes.stage import image_axes
 
     with torch.no_grad():
         found = image_axes(image)
-    keep = found.accepted.nonzero()[:, 0]
+    keep = found.accepted.nonzero()[:, 0] if bool(found.accepted.any()) else torch.arange(min(1, len(found)))
     pairs = [found.pairs[found.pair_axis == int(k)].to(image.device) for k in keep]
     return found.lines[keep].to(image.device), pairs
 
@@ -230,7 +231,7 @@ def symmetry_map(
     if pairs.shape[0] == 0:
         notes.append("no mirror pairs found: no symmetry map")
     elif k == 0:
-        notes.append("no axis accepted by the axis stage: no symmetry map")
+        notes.append("no axis found by the axis stage: no symmetry map")
     elif len(clusters.members) < k:
         notes.append(f"asked for {k} axes, found {len(clusters.members)} clusters of at least {cl.min_support} pairs")
     pair_cluster = torch.full((pairs.shape[0],), -1, dtype=torch.int64, device=img.device)

@@ -174,7 +174,7 @@ def symm_slic(
     if axes is None and settings.axes_from == "stage":
         axes = stage_lines(rgb)
         if axes.shape[0] == 0:
-            notes.append("no axis accepted by the axis stage: plain SLIC superpixels")
+            notes.append("no axis found by the axis stage: plain SLIC superpixels")
     if axes is not None and len(axes) == 0:
         none = torch.zeros(0, 2, dtype=torch.float64)
         found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), none, torch.zeros(0, dtype=torch.float64),
@@ -243,12 +243,14 @@ def symm_slic(
 
 def stage_lines(rgb: torch.Tensor) -> torch.Tensor:
     """``(A, 3)`` float64 lines ``(n_x, n_y, offset)`` of the axes the axis stage
-    (:func:`torchsym.image.axes.image_axes`) accepts on ``rgb (3, H, W)``."""
+    (:func:`torchsym.image.axes.image_axes`) accepts on ``rgb (3, H, W)``; the best-ranked
+    one when none is accepted (superpixels are asked for about an axis)."""
     from torchsym.image.axes.stage import image_axes
 
     with torch.no_grad():
         found = image_axes(rgb[None])
-    return found.lines[found.accepted].double().cpu()
+    keep = found.accepted if bool(found.accepted.any()) else torch.arange(len(found)) < 1
+    return found.lines[keep].double().cpu()
 
 
 @register_solver("symmslic", kind="image")
