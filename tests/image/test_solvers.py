@@ -27,7 +27,7 @@ class TestRegistryAndConfigs:
     def test_registered(self):
         names = torchsym.SOLVERS.names("image")
         assert "ksymmetry" in names and "boundary_cliques" in names
-        assert torchsym.SOLVERS.default_for("image").name in ("ksymmetry", "boundary_cliques")
+        assert torchsym.SOLVERS.default_for("image").name == "axes"
 
     @pytest.mark.parametrize("name", ["image_ksymmetry.yaml", "image_boundary_cliques.yaml"])
     def test_config_builds(self, name):

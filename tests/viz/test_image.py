@@ -34,3 +34,22 @@ class TestWriteArtifacts:
         batch = ReflectionAxesBatch((_result(), empty_result(100, 120, "test")))
         paths = write_artifacts(batch, torch.rand(2, 1, 100, 120), tmp_path, "b")
         assert [p.name for p in paths] == ["b_0_axes.png", "b_1_axes.png"] and all(p.stat().st_size > 0 for p in paths)
+
+
+def test_no_accepted_axis_is_said_on_the_picture():
+    import dataclasses
+
+    import torch
+
+    from torchsym.image.results import ReflectionAxesResult
+    from torchsym.viz.image import draw_axes
+
+    res = ReflectionAxesResult(axes=torch.tensor([[10.0, 5.0, 10.0, 50.0]]), scores=torch.tensor([0.05]),
+                               lines=torch.tensor([[1.0, 0.0, -10.0]]), pairs=torch.zeros(0, 4),
+                               pair_axis=torch.zeros(0, dtype=torch.int64), image_size=(64, 64), method="axes",
+                               accepted=torch.tensor([False]))
+    img = torch.rand(3, 64, 64)
+    none = draw_axes(img, res)
+    one = draw_axes(img, dataclasses.replace(res, accepted=torch.tensor([True])))
+    assert none.shape == one.shape and not (none == one).all()
+    assert "no axis accepted" in res.summary()

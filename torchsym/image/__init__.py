@@ -1,5 +1,6 @@
 """Reflection symmetry in photographs (thesis Ch. 2-4)."""
 
+from torchsym.image.axes import AxisStage, AxisStageSettings, image_axes
 from torchsym.image.boundary_cliques import BoundaryCliqueDetector, BoundaryCliquesSettings, boundary_clique_axes
 from torchsym.image.ksymmetry import KSymmetryDetector, KSymmetrySettings, ksymmetry_axes
 from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult
@@ -8,6 +9,9 @@ from torchsym.image.pointsymm_axis import ImageAxisResult, PointSymmImage, Point
 from torchsym.image.symmetry_map import StylizeSolver, SymmetryMapResult, SymmetryMapSolver, stylize, symmetry_map
 
 __all__: list[str] = [
+    "AxisStage",
+    "AxisStageSettings",
+    "image_axes",
     "BoundaryCliqueDetector",
     "BoundaryCliquesSettings",
     "KSymmetryDetector",

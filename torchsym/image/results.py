@@ -31,6 +31,8 @@ class ReflectionAxesResult(Result):
         method: the solver's registered name.
         converged: False when an iteration stopped at its limit or a step fell back.
         info: method-specific diagnostics (cost curves, fallbacks, timings), plain Python.
+        accepted: ``(K,)`` bool, the axes the method believes at its default threshold
+            (:mod:`torchsym.image.axes`); None (a method with no decision) accepts all.
     """
 
     axes: torch.Tensor
@@ -42,9 +44,27 @@ class ReflectionAxesResult(Result):
     method: str
     converged: bool = True
     info: dict[str, Any] = dataclasses.field(default_factory=dict)
+    accepted: torch.Tensor | None = None
+
+    def __post_init__(self) -> None:
+        if self.accepted is None:
+            object.__setattr__(self, "accepted", torch.ones(self.axes.shape[0], dtype=torch.bool, device=self.axes.device))
 
     def __len__(self) -> int:
         return int(self.axes.shape[0])
+
+    @property
+    def accepted_axes(self) -> torch.Tensor:
+        """``(A, 4)`` the accepted axes, best first."""
+        return self.axes[self.accepted]
+
+    def summary(self) -> str:
+        """One line: how many axes were accepted and their scores, or that none was."""
+        n = int(self.accepted.sum())
+        if n == 0:
+            return f"no axis accepted ({len(self)} candidates, best score {float(self.scores.max()) if len(self) else 0.0:.3f})"
+        scores = ", ".join(f"{float(s):.3f}" for s in self.scores[self.accepted])
+        return f"{n} axis accepted (score {scores})" if n == 1 else f"{n} axes accepted (scores {scores})"
 
 
 @dataclasses.dataclass(frozen=True)

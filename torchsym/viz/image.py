@@ -1,7 +1,8 @@
 """Pictures of reflection axes found in an image.
 
-The strongest axes are drawn boldly, numbered by rank with their score beside; weaker
-ones faint; the mirror pairs only of the best axis.
+The photo in colour; the accepted axes (``result.accepted``, at most ``top``) drawn boldly,
+numbered by rank with their score beside; further candidates faint and dashed; the mirror
+pairs only of the best accepted axis. A photo with no accepted axis says so on the picture.
 """
 
 from __future__ import annotations
@@ -48,20 +49,20 @@ def _figure(rgb: np.ndarray, result: ReflectionAxesResult, top: int, faint: int,
     dpi = 100
     fig = plt.figure(figsize=(w * scale / dpi, h * scale / dpi + (0.35 if title else 0.0)), dpi=dpi)
     ax = fig.add_axes((0.0, 0.0, 1.0, h * scale / dpi / fig.get_figheight()))
-    gray = rgb.mean(2, keepdims=True)
-    ax.imshow(0.55 * rgb + 0.25 * gray + 0.1, extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
+    ax.imshow(0.85 * rgb + 0.05, extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.axis("off")
     axes = result.axes.detach().cpu().double().numpy()
     scores = result.scores.detach().cpu().double().numpy()
     k = len(axes)
+    top = min(top, int(result.accepted.sum()))  # accepted axes come first (best first)
     lw = 2.5 * max(h, w) * scale / 900 + 1.0
     outline = [pe.Stroke(linewidth=lw + 2.5, foreground="black", alpha=0.8), pe.Normal()]
     for i in range(min(k, top + faint) - 1, top - 1, -1):  # the faint ones first, underneath
         x1, y1, x2, y2 = axes[i]
         ax.plot([x1, x2], [y1, y2], color="white", lw=1.0, alpha=0.45, ls=(0, (4, 3)))
-    if k and n_pairs:
+    if top and n_pairs:
         pairs = result.pairs.detach().cpu().double().numpy()[(result.pair_axis == 0).cpu().numpy()]
         if len(pairs) > n_pairs:
             pairs = pairs[np.linspace(0, len(pairs) - 1, n_pairs).round().astype(int)]
@@ -81,11 +82,15 @@ def _figure(rgb: np.ndarray, result: ReflectionAxesResult, top: int, faint: int,
                     fontsize=10, va="center", path_effects=[pe.withStroke(linewidth=2.5, foreground="black")], zorder=6)
     if title:
         shown = min(k, top)
-        text = (f"{result.method}: {k} axes, the {shown} best numbered by rank (score beside)"
-                + (f", {min(k, top + faint) - shown} more dashed" if k > top and faint else "")
-                + ("; mirror pairs of axis 1" if k and n_pairs else ""))
+        text = (f"{result.method}: {shown} accepted of {k} axes, numbered by rank (score beside)"
+                + (f", {min(k, top + faint) - shown} more candidates dashed" if k > top and faint else "")
+                + ("; mirror pairs of axis 1" if shown and n_pairs else ""))
         fig.text(0.01, 1.0 - 0.175 / fig.get_figheight(), text if k else f"{result.method}: no axis found",
                  fontsize=10, va="center")
+    if not top:
+        ax.text(w / 2, h / 2, "no axis accepted" if k else "no axis found", color="white", fontsize=16,
+                fontweight="bold", ha="center", va="center", zorder=7,
+                path_effects=[pe.withStroke(linewidth=3.5, foreground="black")])
     return fig, plt
 
 

@@ -117,6 +117,21 @@ def test_real_photo_crop(shared_data):
 
 
 @pytest.mark.slow
-def test_axes_count_from_detector(mirrored):
+def test_axes_from_the_axis_stage(mirrored):
+    from torchsym.image.axes import image_axes
+
     r = symmetry_map(mirrored["image"], patchmatch={"max_iters": 1})
-    assert len(r) >= 1 and "axes_count" in r.seconds
+    found = image_axes(mirrored["image"])
+    assert len(r) == int(found.accepted.sum()) >= 1 and "axes" in r.seconds
+
+
+def test_clusters_about_axes_takes_the_pairs_near_each_axis():
+    from torchsym.image.symmetry_map.estimate import clusters_about_axes
+
+    pairs = torch.tensor([[40.0, 10.0, 60.0, 10.0], [30.0, 50.0, 70.0, 50.0], [10.0, 10.0, 20.0, 40.0]])
+    lines = torch.tensor([[1.0, 0.0, -50.0]])  # x = 50
+    own = [torch.tensor([[45.0, 5.0, 55.0, 5.0]])]
+    all_pairs, members = clusters_about_axes(pairs, lines, own, max_angle=2.0, max_distance=3.0, min_support=2)
+    assert all_pairs.shape[0] == 3 and members[0].tolist() == [0, 1]
+    all_pairs, members = clusters_about_axes(pairs, lines, own, max_angle=2.0, max_distance=3.0, min_support=3)
+    assert all_pairs.shape[0] == 4 and members[0].tolist() == [0, 1, 3]

@@ -178,7 +178,7 @@ def _sift_axes(
     return out
 
 
-@register_solver("boundary_cliques", kind="image", default=True)
+@register_solver("boundary_cliques", kind="image")
 class BoundaryCliqueDetector(Solver):
     """Reflection axes by boundary orientation and dominant cliques (thesis Sec. 2.3).
 

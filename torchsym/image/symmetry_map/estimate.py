@@ -2,8 +2,8 @@
 
 Steps (Sec. 3.2): mirrored-SIFT candidate pairs
 (:mod:`~torchsym.image.symmetry_map.candidates`) -> ``k`` clusters by RansaCov
-(:mod:`~torchsym.image.symmetry_map.clustering`; ``k`` given, or the count of
-:class:`torchsym.image.BoundaryCliqueDetector`) -> per cluster: dense descriptors in the
+(:mod:`~torchsym.image.symmetry_map.clustering`) when ``k`` is given, else one cluster
+about each axis the axis stage accepts (:func:`torchsym.image.axes.image_axes`) -> per cluster: dense descriptors in the
 axis frame (:mod:`~torchsym.image.symmetry_map.descriptors`), symmetric PatchMatch
 (:mod:`~torchsym.image.symmetry_map.patchmatch`), the score map
 (:mod:`~torchsym.image.symmetry_map.scores`). Tensor stages run on the image's device.
@@ -11,6 +11,7 @@ axis frame (:mod:`~torchsym.image.symmetry_map.descriptors`), symmetric PatchMat
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -24,7 +25,7 @@ from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError
 from torchsym.image.symmetry_map.candidates import mirror_sift_matches
-from torchsym.image.symmetry_map.clustering import ransacov
+from torchsym.image.symmetry_map.clustering import PairClusters, ransacov
 from torchsym.image.symmetry_map.descriptors import dense_axis_descriptors
 from torchsym.image.symmetry_map.patchmatch import (
     best_mirror_pixel,
@@ -39,7 +40,7 @@ from torchsym.image.symmetry_map.result import SymmetryMapResult
 from torchsym.image.symmetry_map.scores import distance_to_points, symmetry_scores
 from torchsym.image.symmetry_map.settings import SymmetryMapSettings
 
-__all__ = ["SymmetryMapSolver", "cluster_field", "count_axes", "symmetry_map", "working_image"]
+__all__ = ["SymmetryMapSolver", "cluster_field", "clusters_about_axes", "stage_axes", "symmetry_map", "working_image"]
 
 
 def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float]:
@@ -56,13 +57,52 @@ def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float
     return F.interpolate(img, size=size, mode="area").clamp(0, 1), max(h, w) / max(size)
 
 
-def count_axes(image: torch.Tensor) -> int:
-    """The number of symmetry axes :class:`torchsym.image.BoundaryCliqueDetector` finds (at least 1)."""
-    from torchsym.image import BoundaryCliqueDetector
+def stage_axes(image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """The accepted axes of :func:`torchsym.image.axes.image_axes` on ``image (1, C, H, W)``
+    (the best-ranked one when none is accepted: a map is asked for): ``(lines (A, 3), pairs)``
+    with ``pairs`` one ``(M_a, 4)`` tensor of each axis's supporting pairs (boundary and
+    mirrored-SIFT), in ``image``'s pixels."""
+    from torchsym.image.axes.stage import image_axes
 
     with torch.no_grad():
-        found = BoundaryCliqueDetector()(image)
-    return max(1, len(found))
+        found = image_axes(image)
+    keep = found.accepted.nonzero()[:, 0] if bool(found.accepted.any()) else torch.arange(min(1, len(found)))
+    pairs = [found.pairs[found.pair_axis == int(k)].to(image.device) for k in keep]
+    return found.lines[keep].to(image.device), pairs
+
+
+def clusters_about_axes(
+    pairs: torch.Tensor, lines: torch.Tensor, own: list[torch.Tensor], *, max_angle: float, max_distance: float,
+    min_support: int,
+) -> tuple[torch.Tensor, list[torch.Tensor]]:
+    """One cluster of mirror pairs per given axis (the count and axes come from the axis stage).
+
+    A pair ``x1, y1, x2, y2`` of ``pairs (P, 4)`` joins axis ``a`` (``lines (A, 3)``, unit
+    normals) when its chord is within ``max_angle`` degrees of the normal and its midpoint
+    within ``max_distance`` px of the line. An axis with fewer than ``min_support`` such
+    pairs takes its own supporting pairs ``own[a] (M_a, 4)`` as well.
+
+    Returns:
+        ``(all_pairs (P', 4), members)``: ``pairs`` with the own pairs appended as needed,
+        and one index tensor into them per axis.
+    """
+    members: list[torch.Tensor] = []
+    extra: list[torch.Tensor] = []
+    n_all = pairs.shape[0]
+    for a in range(lines.shape[0]):
+        n, c = lines[a, :2].to(pairs.dtype), lines[a, 2].to(pairs.dtype)
+        chord = pairs[:, 2:] - pairs[:, :2]
+        cos = (chord @ n).abs() / chord.norm(dim=1).clamp_min(1e-9)
+        mid = 0.5 * (pairs[:, :2] + pairs[:, 2:])
+        ok = (cos >= math.cos(math.radians(max_angle))) & ((mid @ n + c).abs() <= max_distance)
+        idx = ok.nonzero()[:, 0]
+        if idx.numel() < min_support and own[a].shape[0]:
+            idx = torch.cat([idx, torch.arange(n_all, n_all + own[a].shape[0], device=pairs.device)])
+            extra.append(own[a].to(pairs.dtype))
+            n_all += own[a].shape[0]
+        if idx.numel():
+            members.append(idx)
+    return (torch.cat([pairs, *extra]) if extra else pairs), members
 
 
 def _cluster_line(pairs: torch.Tensor) -> torch.Tensor:
@@ -173,18 +213,25 @@ def symmetry_map(
     )
     seconds["candidates"] = time.perf_counter() - t
     k = settings.n_axes
-    if k is None:
-        t = time.perf_counter()
-        k = count_axes(img) if pairs.shape[0] and min(h, w) >= 32 else 1
-        seconds["axes_count"] = time.perf_counter() - t
     cl = settings.clustering
     t = time.perf_counter()
-    clusters = ransacov(
-        pairs, k, eps_d=cl.eps_d, eps_theta=cl.eps_theta, tol_px=cl.tol_px, cover=cl.cover, min_support=cl.min_support
-    )
+    if k is None:  # the axis stage's accepted axes, each with the pairs about it
+        lines, own = stage_axes(img) if min(h, w) >= 32 else (torch.zeros(0, 3), [])
+        seconds["axes"] = time.perf_counter() - t
+        t = time.perf_counter()
+        pairs, members = clusters_about_axes(pairs, lines, own, max_angle=cl.eps_theta,
+                                             max_distance=cl.eps_d * max(h, w), min_support=cl.min_support)
+        clusters = PairClusters(members, lines, 0)
+        k = len(lines)
+    else:
+        clusters = ransacov(
+            pairs, k, eps_d=cl.eps_d, eps_theta=cl.eps_theta, tol_px=cl.tol_px, cover=cl.cover, min_support=cl.min_support
+        )
     seconds["clustering"] = time.perf_counter() - t
     if pairs.shape[0] == 0:
         notes.append("no mirror pairs found: no symmetry map")
+    elif k == 0:
+        notes.append("no axis found by the axis stage: no symmetry map")
     elif len(clusters.members) < k:
         notes.append(f"asked for {k} axes, found {len(clusters.members)} clusters of at least {cl.min_support} pairs")
     pair_cluster = torch.full((pairs.shape[0],), -1, dtype=torch.int64, device=img.device)

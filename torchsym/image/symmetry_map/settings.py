@@ -84,7 +84,7 @@ class ScoreSettings(Settings):
 class SymmetryMapSettings(Settings):
     """Settings of :func:`~torchsym.image.symmetry_map.symmetry_map` (thesis Ch. 3, Algorithm 3)."""
 
-    n_axes: int | None = setting(None, "symmetry maps (the thesis's k); None: the image-axes detector's count", low=1)
+    n_axes: int | None = setting(None, "symmetry maps (the thesis's k), RansaCov clusters; None: one per axis the axis stage accepts", low=1)
     max_side: int | None = setting(640, "the image is resized so that its longer side is at most this; None: never", unit="px", low=32)
     candidates: CandidateSettings = group(CandidateSettings)
     clustering: ClusteringSettings = group(ClusteringSettings)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
 
@@ -43,6 +44,9 @@ class SymmSlicSettings(Settings):
     tol_shift: float = setting(
         1.5, "stop before max_iters once the centres move less than this on average between iterations (SLIC's residual error, L1; the thesis: till convergence)", unit="px", low=0.0
     )
+    axes_from: Literal["stage", "pairs"] = setting(
+        "stage", "stage: the axes the axis stage accepts (torchsym.image.axes); pairs: the thesis's Hough vote of its "
+        "mirror pixel pairs (Sec. 4.2.1)")
     pairs: MirrorPairSettings = group(MirrorPairSettings)
     min_mirror_correlation: float = setting(
         0.8,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
@@ -11,101 +10,29 @@ import torch
 from scipy.spatial import cKDTree
 
 from torchsym.core.checks import check_image
-from torchsym.core.random import DEFAULT_SEED, make_generator, numpy_rng, random_subset
+from torchsym.core.random import make_generator, numpy_rng, random_subset
 from torchsym.core.registry import register_solver
-from torchsym.core.results import Result, on_input_device
-from torchsym.core.settings import Settings, Solver, group, resolve_settings, setting
+from torchsym.core.results import on_input_device
+from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputValueError
 from torchsym.features.harris import harris_corners
+from torchsym.image.lines import clip_line_to_image
+from torchsym.image.pointsymm_axis.result import ImageAxisResult
+from torchsym.image.pointsymm_axis.settings import PointSymmImageSettings
 from torchsym.pointset import PointSymmSettings, point_symm
 from torchsym.pointset.score import symmetry_score
 
-__all__ = ["ImageAxisResult", "PointSymmImage", "PointSymmImageSettings", "point_symm_image"]
+__all__ = ["PointSymmImage", "point_symm_image"]
 
 #: smallest image side accepted, in pixels (as the other image solvers)
 MIN_SIDE = 32
 
 
-@dataclasses.dataclass(frozen=True)
-class HarrisSettings(Settings):
-    """The corner points: Harris corners through kornia."""
-
-    max_corners: int = setting(200, "largest number of Harris corners used, strongest first", low=4)
-    k: float = setting(0.04, "the Harris detector's k", low=0.0, low_open=True)
-
-
-@dataclasses.dataclass(frozen=True)
-class RansacSettings(Settings):
-    """RANSAC over PointSymm fits on random subsets of the corners."""
-
-    n_iters: int = setting(20, "RANSAC iterations (all run)", low=1)
-    sample_fraction: float = setting(0.5, "fraction of the corners in each sample", low=0.0, high=1.0, low_open=True)
-    inlier_threshold: float = setting(3.0, "largest distance from a reflected corner to its mirror", unit="px", low=0.0, low_open=True)
-
-
-@dataclasses.dataclass(frozen=True)
-class PointSymmImageSettings(Settings):
-    """Settings of :func:`point_symm_image` (thesis Sec. 7.4.4)."""
-
-    harris: HarrisSettings = group(HarrisSettings)
-    ransac: RansacSettings = group(RansacSettings)
-    match_fraction: float = setting(0.8, "PointSymm's cardinality limit inside each sample (Sec. 7.4.4)", low=0.0, high=1.0, low_open=True)
-    seed: int = setting(DEFAULT_SEED, "seed of the generator a module uses when called without one", low=0)
-
-
-@dataclasses.dataclass(frozen=True)
-class ImageAxisResult(Result):
-    """The reflection symmetry axis of an image found by :func:`point_symm_image`.
-
-    Attributes:
-        normal: ``(2,)`` unit normal of the axis ``normal . (x, y) + offset = 0`` in pixel
-            coordinates (``x`` the column, ``y`` the row).
-        offset: ``()`` offset of the axis.
-        segment: ``(2, 2)`` the axis clipped to the image, two ``(x, y)`` end points
-            (NaN if the line misses the image).
-        corners: ``(K, 2)`` the Harris corners ``(x, y)`` used as the point set.
-        inliers: ``(K,)`` bool, corners whose reflection lands near another corner.
-        permutation: ``(K,)`` int64, mirror corner of each inlier, -1 elsewhere.
-        score: in [0, 1], calibrated against chance
-            (:func:`~torchsym.pointset.score.symmetry_score`): ``q``, the mean over the
-            corners of ``max(0, 1 - r / min(nn, moved))`` (``r`` the distance from the
-            reflected corner to its mirror, inliers only, ``nn`` the distance to the corner's
-            nearest other corner, ``moved`` how far the reflection moves it), corrected by
-            its mean ``q_0`` under random axes: ``max(0, (q - q_0) / (1 - q_0))``. Noise gives
-            dense, evenly spaced corners whose reflections land near some corner by chance;
-            this score counts only what the axis does better than chance.
-        iterations: RANSAC iterations run.
-    """
-
-    normal: torch.Tensor
-    offset: torch.Tensor
-    segment: torch.Tensor
-    corners: torch.Tensor
-    inliers: torch.Tensor
-    permutation: torch.Tensor
-    score: float
-    iterations: int
-
-
 def _segment(normal: np.ndarray, offset: float, width: int, height: int) -> np.ndarray:
-    """``(2, 2)`` end points ``(x, y)`` of the line clipped to the image, NaN if it misses."""
-    pts = []
-    a, b = normal
-    for x in (0.0, width - 1.0):
-        if abs(b) > 1e-12:
-            y = -(a * x + offset) / b
-            if 0 <= y <= height - 1:
-                pts.append((x, y))
-    for y in (0.0, height - 1.0):
-        if abs(a) > 1e-12:
-            x = -(b * y + offset) / a
-            if 0 <= x <= width - 1:
-                pts.append((x, y))
-    if len(pts) < 2:
-        return np.full((2, 2), np.nan)
-    pts = np.array(pts)
-    far = np.argmax(((pts[:, None] - pts[None]) ** 2).sum(-1).reshape(-1))
-    return pts[[far // len(pts), far % len(pts)]]
+    """``(2, 2)`` end points ``(x, y)`` of the line clipped to the image
+    (:func:`~torchsym.image.lines.clip_line_to_image`), NaN if it misses."""
+    seg = clip_line_to_image(np.array([normal[0], normal[1], offset]), -1e12, 1e12, width, height)
+    return np.full((2, 2), np.nan) if seg is None else np.asarray(seg, dtype=np.float64).reshape(2, 2)
 
 
 def _reflect(corners: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:

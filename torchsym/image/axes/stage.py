@@ -1,0 +1,176 @@
+"""The axis stage: every image method's reflection axes (thesis Ch. 2), verified by the image.
+
+Steps: candidate axes from symmetric boundary pairs and mirrored-SIFT pairs
+(:func:`~torchsym.image.boundary_cliques.boundary_clique_axes`, thesis Secs. 2.2-2.3) ->
+each candidate's support compared with its reflection on a band-passed pyramid level
+(:func:`~torchsym.image.axes.mirror_ncc.mirror_ncc`, after Cicconet et al. 2017) -> angle
+and offset refined to the best correlation (:func:`~torchsym.image.axes.refine.refine_axes`)
+-> the calibrated score and the decision (:mod:`~torchsym.image.axes.decision`) -> one axis
+per object (:func:`~torchsym.image.suppression.suppress_duplicates`), best first.
+Why each step exists: ``docs/design/axes.md``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import torch
+
+from torchsym.core.checks import check_image
+from torchsym.core.random import make_generator
+from torchsym.core.registry import register_solver
+from torchsym.core.results import on_input_device
+from torchsym.core.settings import Solver, resolve_settings
+from torchsym.image.axes.decision import calibrated_score, turned_ncc
+from torchsym.image.axes.extent import grow_extent
+from torchsym.image.axes.level import band_level, from_level, to_level
+from torchsym.image.axes.mirror_ncc import mirror_ncc
+from torchsym.image.axes.refine import refine_axes
+from torchsym.image.axes.settings import AxisStageSettings
+from torchsym.image.boundary_cliques import boundary_clique_axes
+from torchsym.image.lines import clip_line_to_image
+from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult, empty_result
+from torchsym.image.suppression import suppress_duplicates
+
+__all__ = ["AxisStage", "image_axes", "verify_candidates"]
+
+METHOD = "axes"
+
+
+@on_input_device
+def image_axes(
+    image: torch.Tensor,
+    settings: AxisStageSettings | Mapping[str, Any] | None = None,
+    *,
+    generator: torch.Generator | None = None,
+    **overrides: Any,
+) -> ReflectionAxesResult | ReflectionAxesBatch:
+    """The reflection axes of a photograph, ranked by a calibrated score, with a decision.
+
+    Args:
+        image: ``(C, H, W)`` or ``(B, C, H, W)`` float image in [0, 1] (or uint8), ``C`` in
+            {1, 3}, sides >= 16.
+        settings: :class:`AxisStageSettings`, a mapping of them, or None (defaults).
+        generator: the source of randomness of the candidates (``torch.Generator``); None
+            uses a fresh generator seeded with ``settings.candidates.seed``.
+        **overrides: settings by name (dotted for groups: ``decision.threshold=0.3``).
+
+    Returns:
+        :class:`~torchsym.image.results.ReflectionAxesResult` (a batch for ``B > 1``):
+        ``axes (K, 4)`` and ``scores (K,)`` (the calibrated probability that the axis is
+        right, in [0, 1]) best first, ``accepted (K,)`` those at or above
+        ``decision.threshold``; ``info`` holds each axis's ``ncc`` and ``contrast``.
+
+    Example:
+        >>> from torchsym.image.synthetic import mirrored_objects_image
+        >>> img, gt = mirrored_objects_image(1)
+        >>> res = image_axes(img)
+        >>> bool(res.accepted[0])
+        True
+    """
+    settings = resolve_settings(AxisStageSettings, settings, overrides)
+    generator = generator if generator is not None else make_generator(settings.candidates.seed)
+    img = check_image(image, "image", min_size=16)
+    found = [_one(img[b : b + 1], settings, generator) for b in range(img.shape[0])]
+    return found[0] if len(found) == 1 else ReflectionAxesBatch(tuple(found))
+
+
+def _one(img: torch.Tensor, settings: AxisStageSettings, generator: torch.Generator) -> ReflectionAxesResult:
+    """:func:`image_axes` on one ``(1, C, H, W)`` image."""
+    t0 = time.perf_counter()
+    cand = boundary_clique_axes(img.detach(), settings.candidates, generator=generator)
+    return verify_candidates(img, cand, settings, {"stage_seconds": {"candidates": time.perf_counter() - t0}})
+
+
+def verify_candidates(
+    img: torch.Tensor, cand: ReflectionAxesResult, settings: AxisStageSettings, info: dict[str, Any] | None = None
+) -> ReflectionAxesResult:
+    """Steps 2-5 on the candidate axes ``cand`` of the ``(1, C, H, W)`` image ``img``: the
+    photometric test, refinement, the extent, the calibrated score and the decision."""
+    h, w = int(img.shape[-2]), int(img.shape[-1])
+    info = dict(info or {}, n_candidates=len(cand))
+    stages = info.setdefault("stage_seconds", {})
+    if len(cand) == 0:
+        return empty_result(h, w, METHOD, pairs=cand.pairs, reason=cand.info.get("reason", "no candidate axis"), **info)
+    tic = time.perf_counter()
+    ph, rf = settings.photometric, settings.refine
+    level, scale = band_level(img.detach(), ph.side, ph.band_sigma)
+    axes = to_level(cand.axes.to(level.device), scale, ph.width)
+    for _ in range(rf.passes):
+        axes, ncc, _ = refine_axes(level, axes, angle_step=rf.angle_step, offset_step=rf.offset_step,
+                                   rounds=rf.rounds, k=rf.steps, n_along=ph.n_along, n_across=ph.n_across)
+        if rf.extent_threshold is not None:
+            axes = grow_extent(level, axes, threshold=rf.extent_threshold, width=ph.width)
+    ncc = mirror_ncc(level, axes, n_along=ph.n_along, n_across=ph.n_across)[0]
+    contrast = ncc - turned_ncc(level, axes, n_along=ph.n_along, n_across=ph.n_across).mean(1)
+    segments = from_level(axes, scale).cpu().double()
+    length = (segments[:, 2:] - segments[:, :2]).norm(dim=1).float() / max(h, w)
+    score = calibrated_score(contrast.cpu(), length, cand.scores.float().cpu(), settings.decision)
+    stages["photometric"] = time.perf_counter() - tic
+    return _ranked(segments, score, ncc.cpu(), contrast.cpu(), cand, settings, info, h, w)
+
+
+def _ranked(
+    segments: torch.Tensor, score: torch.Tensor, ncc: torch.Tensor, contrast: torch.Tensor, cand: ReflectionAxesResult,
+    settings: AxisStageSettings, info: dict[str, Any], h: int, w: int,
+) -> ReflectionAxesResult:
+    """The result: segments ``(N, 4)`` clipped to the image, duplicates of better axes
+    dropped, at most ``max_axes``, best first; pairs keep the axis their candidate became."""
+    lines, extents, segs, keep_idx = [], [], [], []
+    for k, seg in enumerate(segments.numpy()):
+        d = seg[2:] - seg[:2]
+        length = float(np.hypot(*d))
+        if length <= 1e-6:
+            continue
+        u = d / length
+        line = np.array([-u[1], u[0], u[1] * seg[0] - u[0] * seg[1]])  # a x + b y + c = 0, unit (a, b)
+        foot, along = -line[2] * line[:2], np.array([-line[1], line[0]])  # as clip_line_to_image
+        t = sorted(float((p - foot) @ along) for p in (seg[:2], seg[2:]))
+        clipped = clip_line_to_image(line, t[0], t[1], w, h)
+        if clipped is None:
+            continue
+        lines.append(line)
+        extents.append((t[0], t[1]))
+        segs.append(clipped)
+        keep_idx.append(k)
+    dec = settings.decision
+    order = suppress_duplicates(lines, extents, [float(score[k]) for k in keep_idx], angle=dec.duplicate_angle,
+                                distance=dec.duplicate_distance * max(h, w))[: settings.max_axes]
+    info["duplicates_dropped"] = len(keep_idx) - len(order)
+    if not order:
+        return empty_result(h, w, METHOD, pairs=cand.pairs, reason="no candidate axis inside the image", **info)
+    pick = [keep_idx[i] for i in order]
+    new_index = torch.full((len(cand) + 1,), -1, dtype=torch.int64)
+    new_index[torch.tensor(pick)] = torch.arange(len(pick))
+    pair_axis = new_index[cand.pair_axis]  # -1 stays -1 (the last slot)
+    info.update(ncc=[float(ncc[k]) for k in pick], contrast=[float(contrast[k]) for k in pick],
+                candidate_rank=pick)
+    scores = score[pick].float()
+    return ReflectionAxesResult(
+        axes=torch.tensor([segs[i] for i in order], dtype=torch.float32),
+        scores=scores,
+        lines=torch.tensor(np.stack([lines[i] for i in order]), dtype=torch.float32),
+        pairs=cand.pairs.float(),
+        pair_axis=pair_axis,
+        image_size=(h, w),
+        method=METHOD,
+        converged=cand.converged,
+        info=info,
+        accepted=scores >= dec.threshold,
+    )
+
+
+@register_solver("axes", kind="image", default=True)
+class AxisStage(Solver):
+    """Reflection axes of a photograph, verified and refined by the image, with a decision.
+
+    Module form of :func:`image_axes`; settings: :class:`AxisStageSettings`.
+    """
+
+    settings_class = AxisStageSettings
+
+    def forward(self, data: torch.Tensor, generator: torch.Generator | None = None):
+        return image_axes(data, self.settings, generator=generator)
