@@ -40,7 +40,14 @@ def _resolve(p: Path) -> Path:
 
 
 def _summary(d: dict[str, Any]) -> str:
-    """One line of a result's ``to_dict()``."""
+    """One line of a result's ``to_dict()``; image axes say which were accepted."""
+    if isinstance(d.get("accepted"), list) and isinstance(d.get("scores"), list):
+        kept = [round(float(s), 3) for s, a in zip(d["scores"], d["accepted"]) if a]
+        if not kept:
+            best = max(d["scores"], default=0.0)
+            return f"{d['type']}: no axis accepted ({len(d['scores'])} candidates, best score {best:.3f})"
+        return f"{d['type']}: {len(kept)} axis accepted, scores={kept}" if len(kept) == 1 else \
+            f"{d['type']}: {len(kept)} axes accepted, scores={kept}"
     keys = [k for k in ("normal", "offset", "found", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
     parts = []
     for k in keys:
