@@ -250,7 +250,7 @@ def test_no_pairs_gives_identity(shared_data):
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")  # 122 components, largest without pairs
-    out = intrinsic_symmetry(mesh, hypotheses={"orientation": False})
+    out = intrinsic_symmetry(mesh, hypotheses={"orientation": False, "sign_basis": 0})
     kept = torch.nonzero(out.map >= 0).ravel()
     assert out.dropped_vertices > 0 and (out.map < 0).sum() == out.dropped_vertices
     assert out.pairs.shape[0] == 0
@@ -260,12 +260,18 @@ def test_no_pairs_gives_identity(shared_data):
 
 def test_orientation_hypothesis_finds_what_pairs_miss(shared_data):
     """The largest part of boeing.off is a flat panel, mirror symmetric, on which no
-    feature points pair up; the orientation-reversing functional map finds its mirror."""
+    feature points pair up; the orientation-reversing functional map finds its mirror, and so
+    do the sign hypotheses."""
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")
-    out = intrinsic_symmetry(mesh)
-    assert out.hypothesis == "orientation"
+    for sign_basis, expected in ((0, ("orientation",)), (4, ("orientation", "signs"))):
+        out = intrinsic_symmetry(mesh, hypotheses={"sign_basis": sign_basis})
+        assert out.hypothesis in expected
+        _assert_mirror(mesh, out)
+
+
+def _assert_mirror(mesh, out):
     kept = torch.nonzero(out.map >= 0).ravel()
     x = mesh.vertices[kept].double().numpy()
     y = mesh.vertices[out.map[kept]].double().numpy()

@@ -71,7 +71,8 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
     else (when the map keeps the orientation) the hypothesis's map and the refined map."""
     ks = ws.plan.ks
     if chosen.refined is None:
-        return [(ks, cand.start) for cand in candidates if cand.start is not None]
+        # the sign hypotheses are many and blind to the surface: none of them is a start here
+        return [(ks, cand.start) for cand in candidates if cand.start is not None and cand.name != "signs"]
     if share < KEEPS_ORIENTATION:
         return [
             (ks, chosen.start),  # the hypothesis's own map, the basis growing as in step 11

@@ -17,10 +17,15 @@ from torchsym.mesh.intrinsic.hypotheses import Candidate, first_image
 from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
 from torchsym.mesh.intrinsic.workspace import Workspace
 
-__all__ = ["EXTRINSIC_CLEARLY", "WEAK_DEFECT", "choose", "is_weak", "rank_choice", "refine_score", "screen", "try_extrinsic"]
+__all__ = [
+    "EXTRINSIC_CLEARLY", "REFLECTS", "WEAK_DEFECT", "choose", "is_weak", "rank_choice", "reflection_choice", "refine_score",
+    "screen", "try_extrinsic",
+]
 
 logger = logging.getLogger(__name__)
 
+#: a hypothesis is taken for a reflection when its refined map reverses the orientation at this share of the sample
+REFLECTS = 0.5
 #: a chosen map whose functional defect in k eigenfunctions exceeds this is weak (step 10)
 WEAK_DEFECT = 0.5
 #: the plane's refined map replaces a weak one when each test is at most this share of the weak map's
@@ -84,15 +89,37 @@ def refine_score(ws: Workspace, cand: Candidate, image: np.ndarray | None) -> np
     return np.array([*defects, ws.probe.distortion(refined)])
 
 
+def reflection_choice(ws: Workspace, candidates: list[Candidate], table: np.ndarray) -> int | None:
+    """The refined hypothesis of least geodesic distortion (last column of ``table (H, width)``)
+    below the limit whose map reverses the orientation at at least :data:`REFLECTS` of the
+    sampled vertices (not tested when the faces are not consistently wound); None if none."""
+    distortion = np.where(np.isfinite(table).all(axis=1), table[:, -1], np.inf)
+    read = None
+    for row in np.argsort(distortion, kind="stable"):
+        if not distortion[row] < ws.limit or candidates[row].refined is None:
+            return None
+        if ws.orient is None:
+            return int(row)
+        if read is None:
+            read = np.union1d(ws.rows, ws.two_ring[ws.rows].indices)  # the orientation test reads the 2-rings
+        vmap = np.full(ws.n, -1, dtype=np.int64)
+        vmap[read] = ws.search.map_every_vertex(candidates[row].refined, read)
+        if ws.reversed_share(vmap) >= REFLECTS:
+            return int(row)
+    return None
+
+
 def choose(ws: Workspace, candidates: list[Candidate], images: list[np.ndarray], seen: list[np.ndarray]) -> tuple[np.ndarray, int]:
-    """Step 9: the tests ``(H, width)`` of every hypothesis and the row chosen (:func:`rank_choice`).
+    """Step 9: the tests ``(H, width)`` of every hypothesis and the row chosen
+    (:func:`reflection_choice`, else :func:`rank_choice`).
 
     Screened in order (a duplicate of an earlier map is skipped), then refined on threads.
     """
     screened = [screen(ws, seen, cand, image) for cand, image in zip(candidates, images)]
     scores = parallel.run_branches([partial(refine_score, ws, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
-    return table, rank_choice(table, ws.limit)
+    best = reflection_choice(ws, candidates, table)
+    return table, rank_choice(table, ws.limit) if best is None else best
 
 
 def try_extrinsic(

@@ -70,6 +70,10 @@ class Hypotheses(Settings):
 
     hks_pairs: bool = setting(True, "also pair the feature points on HKS alone (spectral_weight 0)")
     orientation: bool = setting(True, "also fit an orientation-reversing functional map to the dense HKS")
+    sign_basis: int = setting(
+        4, "also start from C = diag(1, s) in this many first eigenfunctions, every sign vector s but all +1 (0: off)",
+        low=0, high=8,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,10 +96,14 @@ class Select(Settings):
         6000, "on larger meshes the sampled searches look among this many evenly spread vertices", low=50
     )
     max_distortion: float = setting(
-        0.12, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
+        0.14, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
         low=0.0, low_open=True,
     )
     max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges", low=0.0, low_open=True)
+    score_distortion: float = setting(
+        0.25, "the returned map's sampled geodesic distortion at which its score reaches 0", low=0.0, low_open=True
+    )
+    weak_score: float = setting(0.5, "below this score the result says the symmetry found is weak", low=0.0, high=1.0)
 
 
 @dataclasses.dataclass(frozen=True)

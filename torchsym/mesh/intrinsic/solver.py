@@ -27,9 +27,11 @@ from torchsym.mesh.intrinsic.hypotheses import (
     orientation_candidate,
     pair_features,
     pairing_candidates,
+    sign_basis_candidates,
+    sign_basis_image,
 )
 from torchsym.mesh.intrinsic.polish import polish
-from torchsym.mesh.intrinsic.probe import GeodesicProbe
+from torchsym.mesh.intrinsic.probe import GeodesicProbe, map_score
 from torchsym.mesh.intrinsic.realign import realign
 from torchsym.mesh.intrinsic.refine import COARSE_EPS, finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
@@ -151,8 +153,14 @@ def intrinsic_symmetry(
             "returned unrefined and is unreliable"
         )
     finish_map(ws, state, timings)
+    score = map_score(ws, state.vmap)
+    if score < settings.select.weak_score:
+        notes.append(
+            f"the intrinsic symmetry found is weak (score {score:.2f} < select.weak_score {settings.select.weak_score:g}): "
+            "the mesh may have no intrinsic reflection symmetry, or the map may be wrong"
+        )
     timings["total"] = time.perf_counter() - t_start
-    return _result(surface, spectrum, features.points, chosen, state, timings, notes)
+    return _result(surface, spectrum, features.points, chosen, state, score, timings, notes)
 
 
 def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> IntrinsicSymmetryResult:
@@ -260,6 +268,14 @@ def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: li
         (candidates, images), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
     ws.probe = probe
     timings["select"] += t_probe
+    if ws.settings.hypotheses.sign_basis >= 2:
+        tic = time.perf_counter()
+        signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis)
+        for cand in signed:
+            cand.pairs = candidates[0].pairs
+        candidates.extend(signed)
+        images.extend(sign_basis_image(ws, cand) for cand in signed)
+        timings["select"] += time.perf_counter() - tic
     return candidates, images
 
 
@@ -282,7 +298,7 @@ def _deferred_thesis_map(checked, chosen: Candidate) -> torch.Tensor:
     return checked.map_to_input(torch.from_numpy(thesis_map(chosen, COARSE_EPS)[0]))
 
 
-def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, timings, notes) -> IntrinsicSymmetryResult:
+def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, score: float, timings, notes) -> IntrinsicSymmetryResult:
     checked = surface.checked
     to_input = checked.vertex_index.numpy()
     refined = state.step11 is not None
@@ -304,6 +320,7 @@ def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: 
         correction_converged=bool(chosen.converged),
         hypothesis=chosen.name,
         holes_closed=surface.holes_closed,
+        score=score,
         notes=tuple(notes),
     )
 
