@@ -88,16 +88,15 @@ class TestIntrinsicSymmetry:
         from torchsym.mesh.intrinsic import realign
 
         mesh, _ = blob
-        monkeypatch.setattr(realign, "BELOW", 2.0)  # step 14 runs
-        monkeypatch.setattr(realign, "GAIN", -2.0)  # and its map is kept
+        forced = {"realign": {"below": 2.0, "gain": -2.0}}  # step 14 runs and its map is kept
         sizes = []
         # (the searches' own two-way brute force, nearest.Nearest.brute, keeps the original)
         monkeypatch.setattr(parallel, "run_branches", lambda tasks: sizes.append(len(tasks)) or run_branches(tasks, 2))
-        threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3), **forced)
         assert sizes[:2] == [2, 2]  # the eigensolver beside the non-spectral work, the pairings beside step 8
         assert len(sizes) >= 4 and max(sizes[2:]) >= 2  # and at least steps 9 and 14
         monkeypatch.setattr(parallel, "run_branches", lambda tasks: run_branches(tasks, 1))
-        serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3), **forced)
         assert any(n.startswith("realigned by ") for n in threaded.notes)
         assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)
         assert torch.equal(threaded.refined_functional_map, serial.refined_functional_map)

@@ -8,10 +8,7 @@ import numpy as np
 
 from torchsym.mesh.geodesic import geodesic_distances
 
-__all__ = ["NEAR_SELF_LIMIT", "GeodesicProbe", "map_score"]
-
-#: share of the probed vertices a map may leave near themselves (more: a partial identity)
-NEAR_SELF_LIMIT = 0.45
+__all__ = ["GeodesicProbe", "map_score"]
 
 
 class GeodesicProbe:

@@ -12,10 +12,7 @@ from torchsym.mesh.intrinsic.hypotheses import Candidate
 from torchsym.mesh.intrinsic.workspace import Workspace
 from torchsym.mesh.nearest import kdtree
 
-__all__ = ["COARSE_EPS", "MapState", "finish_map", "refined_map", "thesis_map"]
-
-#: approximation of the thesis's map when ZoomOut's replaced it (each image at most 1 + this times too far)
-COARSE_EPS = 0.5
+__all__ = ["MapState", "finish_map", "refined_map", "thesis_map"]
 
 
 @dataclasses.dataclass

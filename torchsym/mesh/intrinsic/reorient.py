@@ -19,19 +19,6 @@ from torchsym.mesh.orientation import anticommutation_penalty, orientation_opera
 
 __all__ = ["oriented_fits", "reorient"]
 
-#: re-refine a map that reverses the orientation at fewer sampled vertices than this
-KEEPS_ORIENTATION = 0.5
-#: and take a re-refined map that reverses it at this many
-REVERSES_ORIENTATION = 0.6
-#: penalty weights tried, times refine.orientation_weight
-ORIENTATION_SCALES = (0.1, 1.0)
-#: a re-refined map must leave fewer sampled vertices near themselves than this
-REORIENTED_NEAR_SELF = 0.5
-#: when no hypothesis passed step 9, the distortion limit is this many times step 9's
-RESCUE_DISTORTION = 1.5
-#: the check is skipped above this basis (the dense penalty grows as its fourth power)
-ORIENTATION_MAX_K = 50
-
 
 def oriented_fits(
     big: np.ndarray, area: np.ndarray, rows: np.ndarray, ks: np.ndarray, ops: np.ndarray, weights: tuple[float, ...]
@@ -59,7 +46,7 @@ def oriented_fits(
 def _reoriented(ws: Workspace, bound: float, oriented: dict, schedule: np.ndarray, start: np.ndarray) -> tuple | None:
     """One trial: penalised ZoomOut from ``start (S,)``; its map, ``C``, distortion and reversed share, or None."""
     image, fitted = fmaps.zoomout(ws.big, ws.area, ws.rows, start, schedule, ws.search, ws.settings.refine.involution, oriented)
-    distortion = ws.probe.distortion(image) if ws.probe.near_self(image) < REORIENTED_NEAR_SELF else math.inf
+    distortion = ws.probe.distortion(image) if ws.probe.near_self(image) < ws.settings.refine.reoriented_near_self else math.inf
     if not distortion < bound:
         return None
     trial = ws.search.map_every_vertex(fitted)
@@ -73,7 +60,7 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
     if chosen.refined is None:
         # the sign hypotheses are many and blind to the surface: none of them is a start here
         return [(ks, cand.start) for cand in candidates if cand.start is not None and cand.name != "signs"]
-    if share < KEEPS_ORIENTATION:
+    if share < ws.settings.refine.keeps_orientation:
         return [
             (ks, chosen.start),  # the hypothesis's own map, the basis growing as in step 11
             (np.full(ws.plan.refine_iters, ks[-1]), ws.search.nearest(ks[-1], ws.big[ws.rows, : ks[-1]] @ state.full)),
@@ -83,8 +70,9 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
 
 def _should_check(ws: Workspace, chosen: Candidate, notes: list[str]) -> bool:
     check = bool(ws.plan.refine_iters) and ws.settings.refine.orientation_weight > 0 and (chosen.refined is not None or chosen.usable)
-    if check and ws.plan.refine_k > ORIENTATION_MAX_K:
-        notes.append(f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {ORIENTATION_MAX_K}")
+    max_k = ws.settings.refine.orientation_max_k
+    if check and ws.plan.refine_k > max_k:
+        notes.append(f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {max_k}")
         return False
     if check and not ws.wound:
         notes.append("orientation check skipped: the faces are not consistently wound, so the orientation is undefined")
@@ -94,8 +82,8 @@ def _should_check(ws: Workspace, chosen: Candidate, notes: list[str]) -> bool:
 
 def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state: MapState, notes: list[str], timings: dict[str, float]) -> None:
     """Step 12: of the penalised trials that distort geodesics less than the limit (times
-    :data:`RESCUE_DISTORTION` when no hypothesis passed step 9), the one that reverses the
-    orientation at the most sampled vertices (at least :data:`REVERSES_ORIENTATION`) replaces ``state``'s map."""
+    ``refine.rescue_distortion`` when no hypothesis passed step 9), the one that reverses the
+    orientation at the most sampled vertices (at least ``refine.reverses_orientation``) replaces ``state``'s map."""
     if not _should_check(ws, chosen, notes):
         return
     tic = time.perf_counter()
@@ -104,14 +92,15 @@ def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], stat
     if starts:
         ks, limit = ws.plan.ks, ws.limit
         ops = orientation_operators(ws.v, ws.f, ws.big[:, : ks[-1]], reduce_descriptors(ws.dense_desc, ws.area))  # (r, K, K)
-        best_share, found = REVERSES_ORIENTATION, None
-        weight = ws.settings.refine.orientation_weight
+        ref = ws.settings.refine
+        best_share, found = ref.reverses_orientation, None
+        weight = ref.orientation_weight
         try:
-            fits = oriented_fits(ws.big, ws.area, ws.rows, ks, ops, tuple(c * weight for c in ORIENTATION_SCALES))
+            fits = oriented_fits(ws.big, ws.area, ws.rows, ks, ops, tuple(c * weight for c in ref.orientation_scales))
         except np.linalg.LinAlgError:
             fits = []
             notes.append("orientation check: the penalised fit is numerically singular; the map is kept")
-        bound = limit * RESCUE_DISTORTION if chosen.refined is None else limit
+        bound = limit * ref.rescue_distortion if chosen.refined is None else limit
         # independent trials, on threads; chosen in the order of the loops
         trials = parallel.run_branches([partial(_reoriented, ws, bound, o, sc, st) for o in fits for sc, st in starts])
         for trial in trials:
@@ -132,6 +121,6 @@ def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], stat
             notes.append(
                 f"the map keeps the surface's orientation at {1 - share:.0%} of the sampled vertices (a "
                 "reflection reverses it); ZoomOut with the orientation penalty found no map that reverses it "
-                f"at {REVERSES_ORIENTATION:.0%}, the map is unreliable"
+                f"at {ref.reverses_orientation:.0%}, the map is unreliable"
             )
     timings["orientation_check"] = time.perf_counter() - tic

@@ -33,7 +33,7 @@ from torchsym.mesh.intrinsic.hypotheses import (
 from torchsym.mesh.intrinsic.polish import polish
 from torchsym.mesh.intrinsic.probe import GeodesicProbe, map_score
 from torchsym.mesh.intrinsic.realign import realign
-from torchsym.mesh.intrinsic.refine import COARSE_EPS, finish_map, refined_map, thesis_map
+from torchsym.mesh.intrinsic.refine import finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
@@ -129,7 +129,7 @@ def intrinsic_symmetry(
     timings["select"] += time.perf_counter() - tic
     extrinsic_note = None
     holed = surface.holes_closed > 0 or spectrum.has_boundary
-    if settings.extrinsic.enabled and holed and is_weak(table[best]):
+    if settings.extrinsic.enabled and holed and is_weak(table[best], settings.extrinsic.weak_defect):
         tic = time.perf_counter()
         table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
         timings["extrinsic"] = time.perf_counter() - tic
@@ -160,7 +160,7 @@ def intrinsic_symmetry(
             "the mesh may have no intrinsic reflection symmetry, or the map may be wrong"
         )
     timings["total"] = time.perf_counter() - t_start
-    return _result(surface, spectrum, features.points, chosen, state, score, timings, notes)
+    return _result(surface, spectrum, features.points, chosen, state, score, settings.refine.before_refine_eps, timings, notes)
 
 
 def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> IntrinsicSymmetryResult:
@@ -294,11 +294,13 @@ def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, ext
         )
 
 
-def _deferred_thesis_map(checked, chosen: Candidate) -> torch.Tensor:
-    return checked.map_to_input(torch.from_numpy(thesis_map(chosen, COARSE_EPS)[0]))
+def _deferred_thesis_map(checked, chosen: Candidate, eps: float) -> torch.Tensor:
+    return checked.map_to_input(torch.from_numpy(thesis_map(chosen, eps)[0]))
 
 
-def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, score: float, timings, notes) -> IntrinsicSymmetryResult:
+def _result(
+    surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, score: float, eps: float, timings, notes
+) -> IntrinsicSymmetryResult:
     checked = surface.checked
     to_input = checked.vertex_index.numpy()
     refined = state.step11 is not None
@@ -307,7 +309,7 @@ def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: 
         functional_map=torch.from_numpy(np.ascontiguousarray(chosen.fmap)),
         rotation=torch.from_numpy(chosen.rotation),
         map_before_refine=(
-            Deferred(partial(_deferred_thesis_map, checked, chosen)) if refined
+            Deferred(partial(_deferred_thesis_map, checked, chosen, eps)) if refined
             else checked.map_to_input(torch.from_numpy(state.coarse))
         ),
         refined_functional_map=torch.from_numpy(np.ascontiguousarray(state.full)),
