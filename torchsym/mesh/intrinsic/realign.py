@@ -7,6 +7,7 @@ Kim et al. 2011, here repairing a map), with geodesic and biharmonic (Lipman et 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from functools import partial
 
@@ -83,11 +84,16 @@ def _realigned(ws: Workspace, state: MapState, anchors: np.ndarray, kk: int, dis
     return trial, fitted, ws.reversed_share(trial)
 
 
-def realign(ws: Workspace, state: MapState, notes: list[str], timings: dict[str, float]) -> None:
+def realign(ws: Workspace, state: MapState) -> tuple[MapState, list[str], float]:
     """Step 14 on a map reversing the orientation at under ``realign.below`` of the sample: the
     geodesic and the biharmonic realignment (on threads); the one reversing it at the most
-    sampled vertices replaces ``state``'s map when that share beats the map's by ``realign.gain``."""
+    sampled vertices replaces ``state``'s map when that share beats the map's by ``realign.gain``.
+
+    Returns:
+        The map state after the step, its notes and the seconds taken.
+    """
     tic = time.perf_counter()
+    notes = []
     before = ws.reversed_share(state.vmap) if state.share is None else state.share  # steps 12 / 13 measured it
     if before < ws.settings.realign.below:
         kk = int(state.full.shape[0])
@@ -105,9 +111,10 @@ def realign(ws: Workspace, state: MapState, notes: list[str], timings: dict[str,
             if branch is not None and branch[2] > best_share:
                 best_share, found = branch[2], (label, branch[0], branch[1])
         if found is not None:
-            label, state.vmap, state.full = found
+            label, vmap, full = found
+            state = dataclasses.replace(state, vmap=vmap, full=full)
             notes.append(
                 f"realigned by {label} distances to {anchors.size} anchors: the map reverses the orientation "
                 f"at {best_share:.0%} of the sampled vertices, against {before:.0%}"
             )
-    timings["realign"] = time.perf_counter() - tic
+    return state, notes, time.perf_counter() - tic

@@ -3,6 +3,7 @@ is refined again by ZoomOut with an orientation penalty (Ren et al. 2018)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from functools import partial
@@ -68,26 +69,32 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
     return []
 
 
-def _should_check(ws: Workspace, chosen: Candidate, notes: list[str]) -> bool:
+def _should_check(ws: Workspace, chosen: Candidate) -> tuple[bool, list[str]]:
+    """Whether step 12 runs, and the note saying why not where a reader should know."""
     check = bool(ws.plan.refine_iters) and ws.settings.refine.orientation_weight > 0 and (chosen.refined is not None or chosen.usable)
     max_k = ws.settings.refine.orientation_max_k
     if check and ws.plan.refine_k > max_k:
-        notes.append(f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {max_k}")
-        return False
+        return False, [f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {max_k}"]
     if check and not ws.wound:
-        notes.append("orientation check skipped: the faces are not consistently wound, so the orientation is undefined")
-        return False
-    return check
+        return False, ["orientation check skipped: the faces are not consistently wound, so the orientation is undefined"]
+    return check, []
 
 
-def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state: MapState, notes: list[str], timings: dict[str, float]) -> None:
+def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state: MapState) -> tuple[MapState, list[str], float | None]:
     """Step 12: of the penalised trials that distort geodesics less than the limit (times
     ``refine.rescue_distortion`` when no hypothesis passed step 9), the one that reverses the
-    orientation at the most sampled vertices (at least ``refine.reverses_orientation``) replaces ``state``'s map."""
-    if not _should_check(ws, chosen, notes):
-        return
+    orientation at the most sampled vertices (at least ``refine.reverses_orientation``) replaces ``state``'s map.
+
+    Returns:
+        The map state after the step (with its reversed share measured), its notes, and the
+        seconds taken (None: skipped).
+    """
+    check, notes = _should_check(ws, chosen)
+    if not check:
+        return state, notes, None
     tic = time.perf_counter()
-    share = state.share = ws.reversed_share(state.vmap)
+    share = ws.reversed_share(state.vmap)
+    state = dataclasses.replace(state, share=share)
     starts = _starts(ws, chosen, candidates, state, share)
     if starts:
         ks, limit = ws.plan.ks, ws.limit
@@ -107,9 +114,7 @@ def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], stat
             if trial is not None and trial[3] >= best_share:
                 best_share, found, found_distortion = trial[3], trial[:2], trial[2]
         if found is not None:
-            state.vmap, state.full = found
-            state.share = best_share
-            state.rescued = chosen.refined is None
+            state = dataclasses.replace(state, vmap=found[0], full=found[1], share=best_share, rescued=chosen.refined is None)
             notes.append(
                 ("no hypothesis passed the tests of an isometric involution; refined" if state.rescued else
                  f"the map kept the surface's orientation at {1 - share:.0%} of the sampled vertices; refined again")
@@ -123,4 +128,4 @@ def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], stat
                 "reflection reverses it); ZoomOut with the orientation penalty found no map that reverses it "
                 f"at {ref.reverses_orientation:.0%}, the map is unreliable"
             )
-    timings["orientation_check"] = time.perf_counter() - tic
+    return state, notes, time.perf_counter() - tic

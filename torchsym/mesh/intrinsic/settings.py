@@ -192,8 +192,11 @@ class IntrinsicSymmetrySettings(Settings):
     """Settings of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry` (thesis Ch. 6).
 
     Thesis values where it gives one (``k = 13``, ``h = 50``, ``d <= 25``, a large ``q``),
-    else chosen on a development split of FAUST/TOSCA. The thesis's method alone:
+    else chosen on a development split of FAUST/TOSCA (``hypotheses.sign_basis``,
+    ``select.max_distortion`` and ``select.reflects`` on SHREC'07, ``docs/design/intrinsic.md``).
+    The thesis's method alone:
     ``signs.n_uncertain = 0``, ``hypotheses.hks_pairs = hypotheses.orientation = False``,
+    ``hypotheses.sign_basis = 0``,
     ``extrinsic.enabled = refine.enabled = polish.enabled = realign.enabled = False``
     (and ``coarse.enabled = False`` to solve every vertex).
     """

@@ -68,13 +68,16 @@ def intrinsic_symmetry(
     5. Signs of the eigenfunctions from geodesics between pairs, ``C = diag(s)`` (Sec. 6.2.5).
     6. The correction ``R`` on SO(k) of Eq. 6.4 (Sec. 6.2.6).
     7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
-    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
-    9. Choice of a hypothesis by ZoomOut and tests of an isometric involution on a vertex sample.
+    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``), and
+       ``C = diag(1, s)`` in the first eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``).
+    9. Choice by ZoomOut on a vertex sample: the least-distorting hypothesis that reverses the
+       orientation (a reflection), else the tests of an isometric involution.
     10. The vertices' mirror plane when the chosen map is weak and the mesh has holes (``extrinsic``).
     11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
     12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
     13. ZoomOut on to ``polish.n_eigen`` eigenfunctions (``polish``).
     14. Realignment by distances to anchors (``realign``).
+    15. The map's score in [0, 1] (``result.score``), with a note when under ``select.weak_score``.
 
     Steps 4 and 8-14 go beyond the thesis (``docs/design/intrinsic.md``); the thesis's method
     alone is described in :class:`IntrinsicSymmetrySettings`.
@@ -137,13 +140,18 @@ def intrinsic_symmetry(
     _choice_notes(candidates, table, best, extrinsic_note, notes)
 
     state = refined_map(ws, chosen, timings)  # step 11
-    reorient(ws, chosen, candidates, state, notes, timings)  # step 12
+    state, step_notes, seconds = reorient(ws, chosen, candidates, state)  # step 12
+    notes.extend(step_notes)
+    if seconds is not None:
+        timings["orientation_check"] = seconds
     improvable = chosen.refined is not None or state.rescued
     if plan.polish and improvable:
-        polish(ws, state, notes, timings)  # step 13
+        state, step_notes, timings["polish"] = polish(ws, state)  # step 13
+        notes.extend(step_notes)
     if plan.realign and state.full.shape[0] and improvable:
         if ws.wound:
-            realign(ws, state, notes, timings)  # step 14
+            state, step_notes, timings["realign"] = realign(ws, state)  # step 14
+            notes.extend(step_notes)
         else:
             notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
     if not np.isfinite(table[best]).all() and chosen.usable and not state.rescued:
@@ -152,7 +160,10 @@ def intrinsic_symmetry(
             "in place, or distorted geodesics by more than the limit): the thesis's map is "
             "returned unrefined and is unreliable"
         )
-    finish_map(ws, state, timings)
+    vmap, seconds = finish_map(ws, state)
+    if state.step11 is not None:
+        timings["refine"] += seconds
+    state = dataclasses.replace(state, vmap=vmap)
     score = map_score(ws, state.vmap)
     if score < settings.select.weak_score:
         notes.append(
