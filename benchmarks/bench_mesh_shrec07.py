@@ -17,7 +17,8 @@ leave-one-class-out row: each class scored with the variant (shipped, A, B) that
 on the other seven.
 
     PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py --variant NAME='{"hypotheses.sign_basis": 0}'
-    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py [--no-pyfm] [--loco A,B] [--tag TEXT]
+    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py --pyfm-only 5
+    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py [--no-pyfm] [--loco A,B] [--report-only] [--tag TEXT]
 
 Writes ``benchmarks/results/mesh_shrec07.md`` and ``.json``.
 """
@@ -111,15 +112,37 @@ def leave_one_class_out(variant_rows: dict[str, list[dict]]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--no-pyfm", action="store_true")
+    ap.add_argument("--no-pyfm", action="store_true", help="no pyFM in this run (rows of --pyfm-only are used when present)")
     ap.add_argument("--variant", default="", help='NAME=JSON: run intrinsic_symmetry with these overrides instead, '
                                                    'rows to results/mesh_shrec07_NAME.json')
     ap.add_argument("--loco", default="", help="comma-separated variant names whose rows (run before) enter the leave-one-class-out choice")
+    ap.add_argument("--pyfm-only", type=int, default=0, metavar="STEP",
+                    help="run only pyFM, on every STEP-th mesh of each class, rows to results/mesh_shrec07_pyfm.json")
+    ap.add_argument("--report-only", action="store_true", help="rebuild the report from the rows of the last run (with --loco)")
+    ap.add_argument("--timing", action="store_true",
+                    help="wall and processor seconds of detect against sign_basis 0, interleaved, one mesh per class "
+                         "(results/mesh_shrec07_timing.md)")
     ap.add_argument("--tag", default="")
     args = ap.parse_args()
     index = json.loads((DATA / "landmarks.json").read_text())
     names = sorted(index, key=lambda n: (index[n]["class"], n))
     load = os.getloadavg()
+    if args.timing:
+        timing(index, names)
+        return
+    if args.pyfm_only:
+        rows = []
+        for name in names:
+            if int(name.rsplit("_", 1)[1].split(".")[0]) % 5 % args.pyfm_only:
+                continue
+            mesh = read_mesh(DATA / name)
+            p2p, t = pyfm_map(mesh)
+            rows.append({"mesh": name, "class": index[name]["class"], "pyfm": correspondence_rate(mesh, p2p, landmarks=landmark_pairs(index[name])).rate,
+                         "pyfm_seconds": t})
+            print(rows[-1], flush=True)
+        out = {"rows": rows, "load_before": load, "load_after": os.getloadavg()}
+        (HERE / "results" / "mesh_shrec07_pyfm.json").write_text(json.dumps(out, indent=1))
+        return
     if args.variant:
         vname, over = args.variant.split("=", 1)
         over = json.loads(over)
@@ -128,25 +151,66 @@ def main() -> None:
         (HERE / "results" / f"mesh_shrec07_{vname}.json").write_text(json.dumps(out, indent=1))
         print(vname, {k: out[k] for k in ("rate", "mesh_rate", "classes")})
         return
-    rows = run(names, index, torchsym.detect, not args.no_pyfm)
+    if args.report_only:
+        last = json.loads((HERE / "results" / "mesh_shrec07.json").read_text())
+        rows, args.tag, load, load_after = last["rows"], last["tag"], last["load_before"], last["load_after"]
+    else:
+        rows = run(names, index, torchsym.detect, not args.no_pyfm)
+        load_after = os.getloadavg()
     out = {
-        "tag": args.tag, "load_before": load, "load_after": os.getloadavg(), "rows": rows,
+        "tag": args.tag, "load_before": load, "load_after": load_after, "rows": rows,
         "surface": summary(rows), "edges": summary(rows, "edges"),
         "median_seconds": statistics.median(r["seconds"] for r in rows),
         "score_auc": roc_auc([r["score"] for r in rows], [r["surface"] > 0.75 for r in rows]),
     }
-    if not args.no_pyfm:
+    peer = HERE / "results" / "mesh_shrec07_pyfm.json"
+    if args.no_pyfm and peer.exists():  # pyFM run apart, on some of the meshes
+        pyfm_rows = json.loads(peer.read_text())["rows"]
+        same = {r["mesh"]: r for r in rows}
+        out["pyfm"] = summary(pyfm_rows, "pyfm")
+        out["pyfm_meshes"] = len(pyfm_rows)
+        out["torchsym_on_pyfm_meshes"] = summary([same[r["mesh"]] for r in pyfm_rows])
+        out["pyfm_median_seconds"] = statistics.median(r["pyfm_seconds"] for r in pyfm_rows)
+    elif not args.no_pyfm:
         out["pyfm"] = summary(rows, "pyfm")
         out["pyfm_median_seconds"] = statistics.median(r["pyfm_seconds"] for r in rows)
     if args.loco:
         variant_rows = {"shipped": rows}
         for vname in args.loco.split(","):
-            variant_rows[vname] = json.loads((HERE / "results" / f"mesh_shrec07_{vname}.json").read_text())["rows"]
+            path = HERE / "results" / f"mesh_shrec07_{vname}.json"
+            if path.exists():
+                variant_rows[vname] = json.loads(path.read_text())["rows"]
+            else:
+                print(f"no rows of variant {vname}: left out of the choice", flush=True)
         out["variants"] = {v: summary(r) for v, r in variant_rows.items()}
         out["loco"] = leave_one_class_out(variant_rows)
     (HERE / "results" / "mesh_shrec07.json").write_text(json.dumps(out, indent=1))
     (HERE / "results" / "mesh_shrec07.md").write_text(report(out))
     print(report(out))
+
+
+def timing(index: dict, names: list[str]) -> None:
+    """A/B of the shipped config against it without the sign hypotheses, interleaved per mesh."""
+    runs = {"shipped": lambda m: torchsym.detect(m), "sign_basis 0": lambda m: intrinsic_symmetry(m, None, **{"hypotheses.sign_basis": 0})}
+    rows = []
+    for name in names[4::5]:  # one mesh per class
+        mesh = read_mesh(DATA / name)
+        for label, solve in runs.items():
+            wall, cpu = time.perf_counter(), time.process_time()
+            solve(mesh)
+            rows.append({"mesh": name, "run": label, "wall": time.perf_counter() - wall, "cpu": time.process_time() - cpu,
+                         "load": os.getloadavg()[0]})
+            print(rows[-1], flush=True)
+    lines = ["# Seconds per mesh on SHREC'07, shipped config against sign_basis 0 (interleaved)", "",
+             "`python benchmarks/bench_mesh_shrec07.py --timing`; processor seconds count every thread of the solver.", "",
+             "| run | median wall s | median processor s | load during |", "|---|---|---|---|"]
+    for label in runs:
+        mine = [r for r in rows if r["run"] == label]
+        lines.append(f"| {label} | {statistics.median(r['wall'] for r in mine):.2f} | {statistics.median(r['cpu'] for r in mine):.2f} | "
+                     f"{min(r['load'] for r in mine):.1f}-{max(r['load'] for r in mine):.1f} |")
+    (HERE / "results" / "mesh_shrec07_timing.json").write_text(json.dumps(rows, indent=1))
+    (HERE / "results" / "mesh_shrec07_timing.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 def report(out: dict) -> str:
@@ -163,7 +227,10 @@ def report(out: dict) -> str:
     ]
     rows = [("torchsym", "surface", out["surface"]), ("torchsym", "edges", out["edges"])]
     if "pyfm" in out:
-        rows.append(("pyFM", "surface", out["pyfm"]))
+        subset = f" ({out['pyfm_meshes']} meshes)" if "pyfm_meshes" in out else ""
+        rows.append((f"pyFM{subset}", "surface", out["pyfm"]))
+        if "torchsym_on_pyfm_meshes" in out:
+            rows.append((f"torchsym on the same{subset}", "surface", out["torchsym_on_pyfm_meshes"]))
     for variant, s in out.get("variants", {}).items():
         if variant != "shipped":
             rows.append((f"variant {variant} (in-sample)", "surface", s))
