@@ -105,12 +105,12 @@ class TestExtrinsicHypothesis:
         # a finite but large functional defect also counts as weak
         _, mesh, _ = solved
         bumpy = self._bumpy(mesh)
-        out = intrinsic_symmetry(bumpy)
+        no_signs = {"sign_basis": 0}  # the sign hypotheses find a map that is not weak here
+        out = intrinsic_symmetry(bumpy, hypotheses=no_signs)
         assert out.hypothesis == "extrinsic"
         weak = next(n for n in out.notes if "extrinsic reflection plane" in n)
         assert "inf" not in weak  # the intrinsic map had finite defects
-        monkeypatch.setattr(select, "WEAK_DEFECT", 100.0)
-        assert intrinsic_symmetry(bumpy).hypothesis != "extrinsic"
+        assert intrinsic_symmetry(bumpy, hypotheses=no_signs, extrinsic={"weak_defect": 100.0}).hypothesis != "extrinsic"
 
     def test_low_scoring_plane_used_when_its_map_clearly_wins(self, solved, monkeypatch):
         from torchsym.mesh.intrinsic import hypotheses, select
@@ -122,11 +122,10 @@ class TestExtrinsicHypothesis:
         bumpy = self._bumpy(mesh)
         original = hypotheses.extrinsic_candidate
         monkeypatch.setattr(hypotheses, "extrinsic_candidate", lambda *a: (original(*a)[0], 0.1))
-        out = intrinsic_symmetry(bumpy)
+        out = intrinsic_symmetry(bumpy, hypotheses={"sign_basis": 0})
         assert out.hypothesis == "extrinsic"
         assert any("symmetry score 0.10, under 0.30, but each test of its refined map" in n for n in out.notes)
-        monkeypatch.setattr(select, "EXTRINSIC_CLEARLY", 0.3)
-        out = intrinsic_symmetry(bumpy)
+        out = intrinsic_symmetry(bumpy, hypotheses={"sign_basis": 0}, extrinsic={"clearly": 0.3})
         assert out.hypothesis != "extrinsic" and any("did not replace it" in n for n in out.notes)
 
     def test_distortion_limit_applies(self, blob):
@@ -147,10 +146,9 @@ class TestExtrinsicHypothesis:
         mesh, gt = blob
         holed, truth = punch_holes(mesh, torch.from_numpy(gt), area_fraction=0.1, generator=torch.Generator().manual_seed(0))
         original = hypotheses.extrinsic_candidate
-        monkeypatch.setattr(select, "WEAK_DEFECT", -1.0)  # every intrinsic map counts as weak
         for fake, used in ((0.29, True), (0.24, False)):
             monkeypatch.setattr(hypotheses, "extrinsic_candidate", lambda *a, fake=fake: (original(*a)[0], fake))
-            out = intrinsic_symmetry(holed)
+            out = intrinsic_symmetry(holed, extrinsic={"weak_defect": 0.0})  # every intrinsic map counts as weak
             assert out.holes_closed >= 1 and (out.hypothesis == "extrinsic") == used
 
     def test_flat_mesh_own_plane_is_no_map(self):

@@ -32,8 +32,7 @@ class TestPolish:
         from torchsym.mesh.intrinsic import polish
 
         mesh, gt = blob
-        monkeypatch.setattr(polish, "ORIENTATION_DROP", -2.0)  # no share can rise by 2
-        out = intrinsic_symmetry(mesh)
+        out = intrinsic_symmetry(mesh, polish={"orientation_drop": -2.0})  # no share can rise by 2
         assert out.refined_functional_map.shape == (25, 25) and "polish" in out.timings
         assert any(n.startswith("ZoomOut to polish.n_eigen = 40 eigenfunctions not kept (orientation reversed at") for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
@@ -70,8 +69,7 @@ class TestPolish:
 
         monkeypatch.setattr(spectrum, "consistently_wound", lambda faces: False)
         monkeypatch.setattr(GeodesicProbe, "distortion", fake)
-        monkeypatch.setattr(polish, "ORIENTATION_DROP", -2.0)  # would reject every polish if used
-        out = intrinsic_symmetry(mesh)
+        out = intrinsic_symmetry(mesh, polish={"orientation_drop": -2.0})  # would reject every polish if used
         assert any("not consistently wound" in n for n in out.notes)
         rejected = any(n.startswith("ZoomOut to polish.n_eigen = 40 eigenfunctions not kept (geodesic distortion") for n in out.notes)
         assert rejected == rising

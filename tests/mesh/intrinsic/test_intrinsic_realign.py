@@ -55,9 +55,7 @@ class TestRealign:
         from torchsym.mesh.intrinsic import realign
 
         mesh, gt = blob
-        monkeypatch.setattr(realign, "BELOW", 2.0)  # run whatever the share
-        monkeypatch.setattr(realign, "GAIN", -2.0)  # and keep any map
-        out = intrinsic_symmetry(mesh)
+        out = intrinsic_symmetry(mesh, realign={"below": 2.0, "gain": -2.0})  # run whatever the share, keep any map
         assert any(n.startswith("realigned by ") and "distances to 64 anchors" in n for n in out.notes)
         assert correspondence_rate(mesh, out.map, ground_truth=gt).rate == 1.0
 
@@ -65,12 +63,10 @@ class TestRealign:
         from torchsym.mesh.intrinsic import realign
 
         mesh, _ = blob
-        monkeypatch.setattr(realign, "BELOW", 2.0)
-        monkeypatch.setattr(realign, "GAIN", 2.0)  # no share can rise by 2
         calls = []
         original = realign.anchor_realignment
         monkeypatch.setattr(realign, "anchor_realignment", lambda *a, **k: calls.append(1) or original(*a, **k))
-        out = intrinsic_symmetry(mesh)
+        out = intrinsic_symmetry(mesh, realign={"below": 2.0, "gain": 2.0})  # no share can rise by 2
         assert len(calls) == 2  # geodesic and biharmonic distances were both tried
         assert not any(n.startswith("realigned") for n in out.notes)
 
@@ -82,9 +78,7 @@ class TestRealign:
         from torchsym.mesh.intrinsic import realign
 
         mesh, gt = blob
-        monkeypatch.setattr(realign, "BELOW", 2.0)
-        monkeypatch.setattr(realign, "GAIN", -2.0)
-        out = intrinsic_symmetry(mesh, polish={"enabled": False})
+        out = intrinsic_symmetry(mesh, polish={"enabled": False}, realign={"below": 2.0, "gain": -2.0})
         assert "realign" in out.timings and "polish" not in out.timings
         assert any(n.startswith("realigned by ") for n in out.notes)
         assert out.refined_functional_map.shape == (25, 25)  # the realigned map's C in refine_k

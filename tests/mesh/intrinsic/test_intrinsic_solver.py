@@ -88,16 +88,15 @@ class TestIntrinsicSymmetry:
         from torchsym.mesh.intrinsic import realign
 
         mesh, _ = blob
-        monkeypatch.setattr(realign, "BELOW", 2.0)  # step 14 runs
-        monkeypatch.setattr(realign, "GAIN", -2.0)  # and its map is kept
+        forced = {"realign": {"below": 2.0, "gain": -2.0}}  # step 14 runs and its map is kept
         sizes = []
         # (the searches' own two-way brute force, nearest.Nearest.brute, keeps the original)
         monkeypatch.setattr(parallel, "run_branches", lambda tasks: sizes.append(len(tasks)) or run_branches(tasks, 2))
-        threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        threaded = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3), **forced)
         assert sizes[:2] == [2, 2]  # the eigensolver beside the non-spectral work, the pairings beside step 8
         assert len(sizes) >= 4 and max(sizes[2:]) >= 2  # and at least steps 9 and 14
         monkeypatch.setattr(parallel, "run_branches", lambda tasks: run_branches(tasks, 1))
-        serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3))
+        serial = intrinsic_symmetry(mesh, generator=torch.Generator().manual_seed(3), **forced)
         assert any(n.startswith("realigned by ") for n in threaded.notes)
         assert torch.equal(threaded.map, serial.map) and torch.equal(threaded.map_before_refine, serial.map_before_refine)
         assert torch.equal(threaded.refined_functional_map, serial.refined_functional_map)
@@ -250,7 +249,7 @@ def test_no_pairs_gives_identity(shared_data):
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")  # 122 components, largest without pairs
-    out = intrinsic_symmetry(mesh, hypotheses={"orientation": False})
+    out = intrinsic_symmetry(mesh, hypotheses={"orientation": False, "sign_basis": 0})
     kept = torch.nonzero(out.map >= 0).ravel()
     assert out.dropped_vertices > 0 and (out.map < 0).sum() == out.dropped_vertices
     assert out.pairs.shape[0] == 0
@@ -260,12 +259,18 @@ def test_no_pairs_gives_identity(shared_data):
 
 def test_orientation_hypothesis_finds_what_pairs_miss(shared_data):
     """The largest part of boeing.off is a flat panel, mirror symmetric, on which no
-    feature points pair up; the orientation-reversing functional map finds its mirror."""
+    feature points pair up; the orientation-reversing functional map finds its mirror, and so
+    do the sign hypotheses."""
     from torchsym.io import read_mesh
 
     mesh = read_mesh(shared_data / "meshes" / "boeing.off")
-    out = intrinsic_symmetry(mesh)
-    assert out.hypothesis == "orientation"
+    for sign_basis, expected in ((0, ("orientation",)), (4, ("orientation", "signs"))):
+        out = intrinsic_symmetry(mesh, hypotheses={"sign_basis": sign_basis})
+        assert out.hypothesis in expected
+        _assert_mirror(mesh, out)
+
+
+def _assert_mirror(mesh, out):
     kept = torch.nonzero(out.map >= 0).ravel()
     x = mesh.vertices[kept].double().numpy()
     y = mesh.vertices[out.map[kept]].double().numpy()

@@ -18,6 +18,7 @@ from scipy.spatial import cKDTree
 
 from torchsym.core.parallel import thread_budget
 from torchsym.core.random import random_subset
+from torchsym.mesh import fmaps
 from torchsym.mesh.correction import correct_eigenfunctions
 from torchsym.mesh.fmaps import consistency, map_consistency, pointwise_to_functional
 from torchsym.mesh.geodesic import geodesic_distances
@@ -37,6 +38,8 @@ __all__ = [
     "orientation_candidate",
     "pair_features",
     "pairing_candidates",
+    "sign_basis_candidates",
+    "sign_basis_image",
     "sign_hypotheses",
 ]
 
@@ -44,6 +47,7 @@ HYPOTHESIS_TEXT = {
     "pairs": "thesis's pairs",
     "hks_pairs": "pairs on HKS alone (pairs.spectral_weight 0)",
     "orientation": "orientation-reversing functional map",
+    "signs": "signs of the first eigenfunctions (hypotheses.sign_basis)",
     "extrinsic": "extrinsic reflection plane of the vertices",
 }
 
@@ -210,6 +214,37 @@ def orientation_candidate(ws: Workspace) -> tuple[Candidate, float]:
     seconds = time.perf_counter() - tic
     cand = Candidate("orientation", np.zeros((0, 2), np.int64), fmap, np.eye(ws.plan.n_eigen), True, ws.evecs @ fmap.T, ws.evecs, True, [])
     return cand, seconds
+
+
+def sign_basis_candidates(ws: Workspace, m: int) -> list[Candidate]:
+    """Step 8's second extension: ``C = diag(1, s)`` in the first ``m`` eigenfunctions, one
+    hypothesis per sign vector ``s`` in ``{-1, 1}^(m - 1)`` but all ``+1``.
+
+    A reflection maps each eigenfunction of a simple eigenvalue to plus or minus itself, so
+    among the ``2^(m-1) - 1`` hypotheses is the symmetry's ``C`` in the smallest basis
+    whenever the first ``m`` eigenvalues are simple; it needs no feature point, which is
+    what the thesis's pairs miss on meshes whose HKS maxima are few or ambiguous. Each
+    ``fmap`` is ``(k, k)`` with ``+1`` past the first ``m``.
+    """
+    k = ws.plan.n_eigen
+    m = min(m, k)
+    query = ws.evecs[:, :m]  # (V, m)
+    out = []
+    for code in range(1, 2 ** (m - 1)):
+        signs = np.ones(k)
+        signs[1:m] = [-1.0 if (code >> b) & 1 else 1.0 for b in range(m - 1)]
+        out.append(Candidate("signs", np.zeros((0, 2), np.int64), np.diag(signs), np.eye(k), True, query * signs[:m], query, True, []))
+    return out
+
+
+def sign_basis_image(ws: Workspace, cand: Candidate) -> np.ndarray:
+    """A sign hypothesis's map on step 9's sample ``(S,)``: its map in its ``m`` eigenfunctions,
+    then five rounds of ZoomOut up to ``refine.n_eigen`` (in ``m`` dimensions most vertices' nearest
+    image is themselves, which step 9 would take for a partial identity)."""
+    m, k = cand.query.shape[1], ws.plan.refine_k
+    image = first_image(ws, cand)
+    ks = np.unique(np.linspace(m, k, 6).round().astype(int))[1:]
+    return fmaps.zoomout(ws.big, ws.area, ws.rows, image, ks, ws.search, ws.settings.refine.involution)[0] if ks.size else image
 
 
 def extrinsic_candidate(

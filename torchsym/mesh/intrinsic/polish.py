@@ -2,24 +2,25 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 from torchsym.mesh import fmaps
-from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
 from torchsym.mesh.intrinsic.refine import MapState
 from torchsym.mesh.intrinsic.workspace import Workspace
 
-__all__ = ["ORIENTATION_DROP", "polish"]
-
-#: the polished map is dropped when its reversed share falls by more than this
-ORIENTATION_DROP = 0.05
+__all__ = ["polish"]
 
 
-def polish(ws: Workspace, state: MapState, notes: list[str], timings: dict[str, float]) -> None:
+def polish(ws: Workspace, state: MapState) -> tuple[MapState, list[str], float]:
     """Step 13: ``polish.max_iters`` rounds of involutive ZoomOut from ``state``'s map on the
     sample, the basis growing from ``refine.n_eigen`` to ``polish.n_eigen``; the polished map
-    replaces ``state``'s unless it reverses the orientation at :data:`ORIENTATION_DROP` fewer
-    sampled vertices (not consistently wound: distorts geodesics more) or is a partial identity."""
+    replaces ``state``'s unless it reverses the orientation at ``polish.orientation_drop`` fewer
+    sampled vertices (not consistently wound: distorts geodesics more) or is a partial identity.
+
+    Returns:
+        The map state after the step, its notes and the seconds taken.
+    """
     tic = time.perf_counter()
     rows = ws.rows
     image, fitted = fmaps.zoomout(ws.big, ws.area, rows, state.vmap[rows], ws.plan.schedule, ws.search, ws.settings.refine.involution)
@@ -27,15 +28,16 @@ def polish(ws: Workspace, state: MapState, notes: list[str], timings: dict[str, 
     if ws.wound:
         before = ws.reversed_share(state.vmap) if state.share is None else state.share  # step 12's figure when it ran
         after = ws.reversed_share(trial)
-        keep, test = after >= before - ORIENTATION_DROP, f"orientation reversed at {before:.0%} -> {after:.0%}"
+        keep, test = after >= before - ws.settings.polish.orientation_drop, f"orientation reversed at {before:.0%} -> {after:.0%}"
     else:  # orientation undefined: the geodesic test instead
         before, after = ws.probe.distortion(state.vmap[rows]), ws.probe.distortion(image)
         keep, test = after <= before, f"geodesic distortion {before:.3f} -> {after:.3f}"
-    if keep and ws.probe.near_self(image) < NEAR_SELF_LIMIT:
-        state.vmap, state.full = trial, fitted
-        state.share = after if ws.wound else None  # the kept map's share, for step 14
+    notes = []
+    if keep and ws.probe.near_self(image) < ws.settings.select.near_self:
+        # the kept map's share, for step 14
+        state = dataclasses.replace(state, vmap=trial, full=fitted, share=after if ws.wound else None)
     else:
         notes.append(
             f"ZoomOut to polish.n_eigen = {ws.plan.polish_k} eigenfunctions not kept ({test}); the map in {ws.plan.refine_k} is returned"
         )
-    timings["polish"] = time.perf_counter() - tic
+    return state, notes, time.perf_counter() - tic

@@ -8,10 +8,7 @@ import numpy as np
 
 from torchsym.mesh.geodesic import geodesic_distances
 
-__all__ = ["NEAR_SELF_LIMIT", "GeodesicProbe"]
-
-#: share of the probed vertices a map may leave near themselves (more: a partial identity)
-NEAR_SELF_LIMIT = 0.45
+__all__ = ["GeodesicProbe", "map_score"]
 
 
 class GeodesicProbe:
@@ -52,3 +49,18 @@ class GeodesicProbe:
         """``image``: ``(S,)`` the map's value at each of ``rows``."""
         moved = self.balls[np.arange(self.ball_rows.size), image[self.ball_rows]]  # (b,)
         return float(np.mean(moved < self.radius))
+
+
+def map_score(ws, vertex_map: np.ndarray) -> float:
+    """The score in [0, 1] of a map ``(V,)`` (-1 allowed off the sample's 2-rings) on the workspace ``ws``
+    of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry`: ``(1 - d / select.score_distortion)_+``
+    times the share of sampled vertices around which it reverses the orientation (an intrinsic
+    reflection reverses it everywhere), or, faces not consistently wound, one less the share it
+    leaves within the correspondence tolerance of themselves; ``d`` its sampled geodesic distortion."""
+    image = vertex_map[ws.rows]
+    if (image < 0).any():
+        return 0.0
+    distortion = ws.probe.distortion(image)
+    fit = max(0.0, 1.0 - distortion / ws.settings.select.score_distortion)
+    agree = ws.reversed_share(vertex_map) if ws.orient is not None else 1.0 - ws.probe.near_self(image)
+    return float(min(1.0, fit * agree))

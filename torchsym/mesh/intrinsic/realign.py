@@ -7,6 +7,7 @@ Kim et al. 2011, here repairing a map), with geodesic and biharmonic (Lipman et 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from functools import partial
 
@@ -16,17 +17,11 @@ from torchsym.core import parallel
 from torchsym.errors import InputValueError
 from torchsym.mesh import fmaps
 from torchsym.mesh.geodesic import geodesic_distances
-from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
 from torchsym.mesh.intrinsic.refine import MapState
 from torchsym.mesh.intrinsic.workspace import Workspace
 from torchsym.mesh.nearest import nearest_profiles
 
-__all__ = ["BELOW", "GAIN", "BiharmonicDistances", "anchor_realignment", "realign"]
-
-#: a realigned map is kept when it reverses the orientation at more than this share more of the sample
-GAIN = 0.02
-#: the step runs only on maps that reverse it at fewer of the sampled vertices than this
-BELOW = 0.9
+__all__ = ["BiharmonicDistances", "anchor_realignment", "realign"]
 
 
 class BiharmonicDistances:
@@ -83,19 +78,24 @@ def _realigned(ws: Workspace, state: MapState, anchors: np.ndarray, kk: int, dis
     rows = ws.rows
     start = anchor_realignment(distances, rows, state.vmap, anchors, ws.settings.realign.max_iters)
     image, fitted = fmaps.zoomout(ws.big, ws.area, rows, start, np.array([kk, kk]), ws.search, ws.settings.refine.involution, brute=True)
-    if ws.probe.near_self(image) >= NEAR_SELF_LIMIT:
+    if ws.probe.near_self(image) >= ws.settings.select.near_self:
         return None
     trial = ws.search.map_every_vertex(fitted)
     return trial, fitted, ws.reversed_share(trial)
 
 
-def realign(ws: Workspace, state: MapState, notes: list[str], timings: dict[str, float]) -> None:
-    """Step 14 on a map reversing the orientation at under :data:`BELOW` of the sample: the
+def realign(ws: Workspace, state: MapState) -> tuple[MapState, list[str], float]:
+    """Step 14 on a map reversing the orientation at under ``realign.below`` of the sample: the
     geodesic and the biharmonic realignment (on threads); the one reversing it at the most
-    sampled vertices replaces ``state``'s map when that share beats the map's by :data:`GAIN`."""
+    sampled vertices replaces ``state``'s map when that share beats the map's by ``realign.gain``.
+
+    Returns:
+        The map state after the step, its notes and the seconds taken.
+    """
     tic = time.perf_counter()
+    notes = []
     before = ws.reversed_share(state.vmap) if state.share is None else state.share  # steps 12 / 13 measured it
-    if before < BELOW:
+    if before < ws.settings.realign.below:
         kk = int(state.full.shape[0])
         biharmonic = BiharmonicDistances(ws.big_evals[:kk], ws.big[:, :kk])
         anchors = ws.rng.choice(ws.rows, size=min(ws.settings.realign.n_anchors, ws.rows.size), replace=False)  # (A,)
@@ -106,14 +106,15 @@ def realign(ws: Workspace, state: MapState, notes: list[str], timings: dict[str,
             partial(_realigned, ws, state, anchors, kk, partial(geodesic_distances, ws.graph)),
             partial(_realigned, ws, state, anchors, kk, biharmonic),
         ])
-        best_share, found = before + GAIN, None
+        best_share, found = before + ws.settings.realign.gain, None
         for label, branch in zip(labels, branches):
             if branch is not None and branch[2] > best_share:
                 best_share, found = branch[2], (label, branch[0], branch[1])
         if found is not None:
-            label, state.vmap, state.full = found
+            label, vmap, full = found
+            state = dataclasses.replace(state, vmap=vmap, full=full)
             notes.append(
                 f"realigned by {label} distances to {anchors.size} anchors: the map reverses the orientation "
                 f"at {best_share:.0%} of the sampled vertices, against {before:.0%}"
             )
-    timings["realign"] = time.perf_counter() - tic
+    return state, notes, time.perf_counter() - tic

@@ -12,15 +12,12 @@ from torchsym.mesh.intrinsic.hypotheses import Candidate
 from torchsym.mesh.intrinsic.workspace import Workspace
 from torchsym.mesh.nearest import kdtree
 
-__all__ = ["COARSE_EPS", "MapState", "finish_map", "refined_map", "thesis_map"]
-
-#: approximation of the thesis's map when ZoomOut's replaced it (each image at most 1 + this times too far)
-COARSE_EPS = 0.5
+__all__ = ["MapState", "finish_map", "refined_map", "thesis_map"]
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class MapState:
-    """The current map, handed from step 11 to 14.
+    """The current map, handed from step 11 to 14 (each step returns a new one).
 
     Attributes:
         vmap: ``(V,)`` the map (step 11's: read only where steps 12-14 need it, -1 elsewhere).
@@ -69,9 +66,12 @@ def refined_map(ws: Workspace, chosen: Candidate, timings: dict[str, float]) -> 
     return MapState(coarse_map, np.zeros((0, 0)), coarse=coarse_map)
 
 
-def finish_map(ws: Workspace, state: MapState, timings: dict[str, float]) -> None:
-    """Step 11's map of the vertices it left unread, when no later step replaced it."""
-    if state.step11 is not None and state.vmap is state.step11:
-        tic = time.perf_counter()
-        state.vmap[state.rest] = ws.search.map_every_vertex(state.step11_fmap, state.rest)
-        timings["refine"] += time.perf_counter() - tic
+def finish_map(ws: Workspace, state: MapState) -> tuple[np.ndarray, float]:
+    """The map ``(V,)`` of every vertex: step 11's completed on the vertices it left unread when
+    no later step replaced it; and the seconds that took."""
+    if state.step11 is None or state.vmap is not state.step11:
+        return state.vmap, 0.0
+    tic = time.perf_counter()
+    vmap = state.vmap.copy()
+    vmap[state.rest] = ws.search.map_every_vertex(state.step11_fmap, state.rest)
+    return vmap, time.perf_counter() - tic

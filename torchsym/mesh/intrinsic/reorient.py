@@ -3,6 +3,7 @@ is refined again by ZoomOut with an orientation penalty (Ren et al. 2018)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from functools import partial
@@ -18,19 +19,6 @@ from torchsym.mesh.intrinsic.workspace import Workspace
 from torchsym.mesh.orientation import anticommutation_penalty, orientation_operators, reduce_descriptors
 
 __all__ = ["oriented_fits", "reorient"]
-
-#: re-refine a map that reverses the orientation at fewer sampled vertices than this
-KEEPS_ORIENTATION = 0.5
-#: and take a re-refined map that reverses it at this many
-REVERSES_ORIENTATION = 0.6
-#: penalty weights tried, times refine.orientation_weight
-ORIENTATION_SCALES = (0.1, 1.0)
-#: a re-refined map must leave fewer sampled vertices near themselves than this
-REORIENTED_NEAR_SELF = 0.5
-#: when no hypothesis passed step 9, the distortion limit is this many times step 9's
-RESCUE_DISTORTION = 1.5
-#: the check is skipped above this basis (the dense penalty grows as its fourth power)
-ORIENTATION_MAX_K = 50
 
 
 def oriented_fits(
@@ -59,7 +47,7 @@ def oriented_fits(
 def _reoriented(ws: Workspace, bound: float, oriented: dict, schedule: np.ndarray, start: np.ndarray) -> tuple | None:
     """One trial: penalised ZoomOut from ``start (S,)``; its map, ``C``, distortion and reversed share, or None."""
     image, fitted = fmaps.zoomout(ws.big, ws.area, ws.rows, start, schedule, ws.search, ws.settings.refine.involution, oriented)
-    distortion = ws.probe.distortion(image) if ws.probe.near_self(image) < REORIENTED_NEAR_SELF else math.inf
+    distortion = ws.probe.distortion(image) if ws.probe.near_self(image) < ws.settings.refine.reoriented_near_self else math.inf
     if not distortion < bound:
         return None
     trial = ws.search.map_every_vertex(fitted)
@@ -71,8 +59,9 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
     else (when the map keeps the orientation) the hypothesis's map and the refined map."""
     ks = ws.plan.ks
     if chosen.refined is None:
-        return [(ks, cand.start) for cand in candidates if cand.start is not None]
-    if share < KEEPS_ORIENTATION:
+        # the sign hypotheses are many and blind to the surface: none of them is a start here
+        return [(ks, cand.start) for cand in candidates if cand.start is not None and cand.name != "signs"]
+    if share < ws.settings.refine.keeps_orientation:
         return [
             (ks, chosen.start),  # the hypothesis's own map, the basis growing as in step 11
             (np.full(ws.plan.refine_iters, ks[-1]), ws.search.nearest(ks[-1], ws.big[ws.rows, : ks[-1]] @ state.full)),
@@ -80,46 +69,52 @@ def _starts(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state
     return []
 
 
-def _should_check(ws: Workspace, chosen: Candidate, notes: list[str]) -> bool:
+def _should_check(ws: Workspace, chosen: Candidate) -> tuple[bool, list[str]]:
+    """Whether step 12 runs, and the note saying why not where a reader should know."""
     check = bool(ws.plan.refine_iters) and ws.settings.refine.orientation_weight > 0 and (chosen.refined is not None or chosen.usable)
-    if check and ws.plan.refine_k > ORIENTATION_MAX_K:
-        notes.append(f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {ORIENTATION_MAX_K}")
-        return False
+    max_k = ws.settings.refine.orientation_max_k
+    if check and ws.plan.refine_k > max_k:
+        return False, [f"orientation check skipped: its dense penalty grows as refine.n_eigen^4, and refine.n_eigen > {max_k}"]
     if check and not ws.wound:
-        notes.append("orientation check skipped: the faces are not consistently wound, so the orientation is undefined")
-        return False
-    return check
+        return False, ["orientation check skipped: the faces are not consistently wound, so the orientation is undefined"]
+    return check, []
 
 
-def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state: MapState, notes: list[str], timings: dict[str, float]) -> None:
+def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], state: MapState) -> tuple[MapState, list[str], float | None]:
     """Step 12: of the penalised trials that distort geodesics less than the limit (times
-    :data:`RESCUE_DISTORTION` when no hypothesis passed step 9), the one that reverses the
-    orientation at the most sampled vertices (at least :data:`REVERSES_ORIENTATION`) replaces ``state``'s map."""
-    if not _should_check(ws, chosen, notes):
-        return
+    ``refine.rescue_distortion`` when no hypothesis passed step 9), the one that reverses the
+    orientation at the most sampled vertices (at least ``refine.reverses_orientation``) replaces ``state``'s map.
+
+    Returns:
+        The map state after the step (with its reversed share measured), its notes, and the
+        seconds taken (None: skipped).
+    """
+    check, notes = _should_check(ws, chosen)
+    if not check:
+        return state, notes, None
     tic = time.perf_counter()
-    share = state.share = ws.reversed_share(state.vmap)
+    share = ws.reversed_share(state.vmap)
+    state = dataclasses.replace(state, share=share)
     starts = _starts(ws, chosen, candidates, state, share)
     if starts:
         ks, limit = ws.plan.ks, ws.limit
         ops = orientation_operators(ws.v, ws.f, ws.big[:, : ks[-1]], reduce_descriptors(ws.dense_desc, ws.area))  # (r, K, K)
-        best_share, found = REVERSES_ORIENTATION, None
-        weight = ws.settings.refine.orientation_weight
+        ref = ws.settings.refine
+        best_share, found = ref.reverses_orientation, None
+        weight = ref.orientation_weight
         try:
-            fits = oriented_fits(ws.big, ws.area, ws.rows, ks, ops, tuple(c * weight for c in ORIENTATION_SCALES))
+            fits = oriented_fits(ws.big, ws.area, ws.rows, ks, ops, tuple(c * weight for c in ref.orientation_scales))
         except np.linalg.LinAlgError:
             fits = []
             notes.append("orientation check: the penalised fit is numerically singular; the map is kept")
-        bound = limit * RESCUE_DISTORTION if chosen.refined is None else limit
+        bound = limit * ref.rescue_distortion if chosen.refined is None else limit
         # independent trials, on threads; chosen in the order of the loops
         trials = parallel.run_branches([partial(_reoriented, ws, bound, o, sc, st) for o in fits for sc, st in starts])
         for trial in trials:
             if trial is not None and trial[3] >= best_share:
                 best_share, found, found_distortion = trial[3], trial[:2], trial[2]
         if found is not None:
-            state.vmap, state.full = found
-            state.share = best_share
-            state.rescued = chosen.refined is None
+            state = dataclasses.replace(state, vmap=found[0], full=found[1], share=best_share, rescued=chosen.refined is None)
             notes.append(
                 ("no hypothesis passed the tests of an isometric involution; refined" if state.rescued else
                  f"the map kept the surface's orientation at {1 - share:.0%} of the sampled vertices; refined again")
@@ -131,6 +126,6 @@ def reorient(ws: Workspace, chosen: Candidate, candidates: list[Candidate], stat
             notes.append(
                 f"the map keeps the surface's orientation at {1 - share:.0%} of the sampled vertices (a "
                 "reflection reverses it); ZoomOut with the orientation penalty found no map that reverses it "
-                f"at {REVERSES_ORIENTATION:.0%}, the map is unreliable"
+                f"at {ref.reverses_orientation:.0%}, the map is unreliable"
             )
-    timings["orientation_check"] = time.perf_counter() - tic
+    return state, notes, time.perf_counter() - tic

@@ -67,7 +67,12 @@ class IntrinsicSymmetryResult(Result):
         num_components: connected components of the input mesh.
         dropped_vertices: input vertices outside the solved component.
         correction_converged: whether every trust-region run of the chosen hypothesis converged.
-        hypothesis: ``"pairs"``, ``"hks_pairs"``, ``"orientation"`` or ``"extrinsic"``.
+        hypothesis: ``"pairs"``, ``"hks_pairs"``, ``"orientation"``, ``"signs"`` or ``"extrinsic"``.
+        score: how well ``map`` passes as an intrinsic reflection, in [0, 1]: ``(1 - d / d_0)_+``
+            times the share of sampled vertices around which it reverses the orientation (times one
+            less the share it leaves in place when the faces are not consistently wound), ``d`` its
+            sampled geodesic distortion, ``d_0 = select.score_distortion``; below
+            ``select.weak_score`` a note says the symmetry found is weak.
         holes_closed: holes covered by new triangles before the spectrum.
         notes: what the solver did that a caller should know.
 
@@ -90,6 +95,7 @@ class IntrinsicSymmetryResult(Result):
     correction_converged: bool
     hypothesis: str = "pairs"
     holes_closed: int = 0
+    score: float = 0.0
     notes: tuple[str, ...] = ()
 
     def __getattribute__(self, name: str) -> Any:

@@ -14,17 +14,12 @@ from torchsym.core import parallel
 from torchsym.mesh import fmaps
 from torchsym.mesh.intrinsic import hypotheses
 from torchsym.mesh.intrinsic.hypotheses import Candidate, first_image
-from torchsym.mesh.intrinsic.probe import NEAR_SELF_LIMIT
 from torchsym.mesh.intrinsic.workspace import Workspace
 
-__all__ = ["EXTRINSIC_CLEARLY", "WEAK_DEFECT", "choose", "is_weak", "rank_choice", "refine_score", "screen", "try_extrinsic"]
+__all__ = ["choose", "is_weak", "rank_choice", "reflection_choice", "refine_score", "screen", "try_extrinsic"]
 
 logger = logging.getLogger(__name__)
 
-#: a chosen map whose functional defect in k eigenfunctions exceeds this is weak (step 10)
-WEAK_DEFECT = 0.5
-#: the plane's refined map replaces a weak one when each test is at most this share of the weak map's
-EXTRINSIC_CLEARLY = 0.6
 
 
 def rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
@@ -46,9 +41,9 @@ def rank_choice(table: np.ndarray, max_distortion: float = math.inf) -> int:
     return best if best == 0 or distortion[best] < min(max_distortion, distortion[0]) else 0
 
 
-def is_weak(row: np.ndarray) -> bool:
-    """Whether the chosen hypothesis's tests ``(width,)`` fail or its defect in ``k`` exceeds :data:`WEAK_DEFECT` (step 10 runs)."""
-    return not np.isfinite(row).all() or row[0] > WEAK_DEFECT
+def is_weak(row: np.ndarray, weak_defect: float) -> bool:
+    """Whether the chosen hypothesis's tests ``(width,)`` fail or its defect in ``k`` exceeds ``weak_defect`` (step 10 runs)."""
+    return not np.isfinite(row).all() or row[0] > weak_defect
 
 
 def screen(ws: Workspace, seen: list[np.ndarray], cand: Candidate, image: np.ndarray | None = None) -> np.ndarray | None:
@@ -58,7 +53,7 @@ def screen(ws: Workspace, seen: list[np.ndarray], cand: Candidate, image: np.nda
     duplicate = any(np.array_equal(image, other) for other in seen)
     seen.append(image)
     cand.start = None if duplicate or not cand.usable else image
-    if not cand.usable or ws.probe.near_self(image) >= NEAR_SELF_LIMIT or duplicate:
+    if not cand.usable or ws.probe.near_self(image) >= ws.settings.select.near_self or duplicate:
         return None
     return image
 
@@ -71,7 +66,7 @@ def refine_score(ws: Workspace, cand: Candidate, image: np.ndarray | None) -> np
         return np.full(plan.width, np.inf)
     rows, area = ws.rows, ws.area
     refined, fitted = fmaps.zoomout(ws.big, area, rows, image, plan.ks, ws.search, ws.settings.refine.involution)
-    if ws.probe.near_self(refined) >= NEAR_SELF_LIMIT:
+    if ws.probe.near_self(refined) >= ws.settings.select.near_self:
         # ZoomOut drifted to the identity, which every test scores as perfect
         cand.notes.append("ZoomOut refinement drifted towards the identity map; the unrefined map is kept")
         return np.full(plan.width, np.inf)
@@ -84,15 +79,37 @@ def refine_score(ws: Workspace, cand: Candidate, image: np.ndarray | None) -> np
     return np.array([*defects, ws.probe.distortion(refined)])
 
 
+def reflection_choice(ws: Workspace, candidates: list[Candidate], table: np.ndarray) -> int | None:
+    """The refined hypothesis of least geodesic distortion (last column of ``table (H, width)``)
+    below the limit whose map reverses the orientation at at least ``select.reflects`` of the
+    sampled vertices (not tested when the faces are not consistently wound); None if none."""
+    distortion = np.where(np.isfinite(table).all(axis=1), table[:, -1], np.inf)
+    read = None
+    for row in np.argsort(distortion, kind="stable"):
+        if not distortion[row] < ws.limit or candidates[row].refined is None:
+            return None
+        if ws.orient is None:
+            return int(row)
+        if read is None:
+            read = np.union1d(ws.rows, ws.two_ring[ws.rows].indices)  # the orientation test reads the 2-rings
+        vmap = np.full(ws.n, -1, dtype=np.int64)
+        vmap[read] = ws.search.map_every_vertex(candidates[row].refined, read)
+        if ws.reversed_share(vmap) >= ws.settings.select.reflects:
+            return int(row)
+    return None
+
+
 def choose(ws: Workspace, candidates: list[Candidate], images: list[np.ndarray], seen: list[np.ndarray]) -> tuple[np.ndarray, int]:
-    """Step 9: the tests ``(H, width)`` of every hypothesis and the row chosen (:func:`rank_choice`).
+    """Step 9: the tests ``(H, width)`` of every hypothesis and the row chosen
+    (:func:`reflection_choice`, else :func:`rank_choice`).
 
     Screened in order (a duplicate of an earlier map is skipped), then refined on threads.
     """
     screened = [screen(ws, seen, cand, image) for cand, image in zip(candidates, images)]
     scores = parallel.run_branches([partial(refine_score, ws, cand, image) for cand, image in zip(candidates, screened)])
     table = np.stack(scores)  # (H, 3), or (H, 2) without refinement
-    return table, rank_choice(table, ws.limit)
+    best = reflection_choice(ws, candidates, table)
+    return table, rank_choice(table, ws.limit) if best is None else best
 
 
 def try_extrinsic(
@@ -102,7 +119,7 @@ def try_extrinsic(
     """Step 10 (run on meshes with holes): the mirror plane's map (:func:`~torchsym.mesh.intrinsic.hypotheses.extrinsic_candidate`),
     refined and tested as in step 9, replaces the weak chosen map when it passes the tests and
     the plane scores at least ``extrinsic.min_score`` (times one less ``patch_share``) or each
-    test is at most :data:`EXTRINSIC_CLEARLY` times the weak map's. Appends to ``candidates``.
+    test is at most ``extrinsic.clearly`` times the weak map's. Appends to ``candidates``.
 
     Returns:
         The tests, the chosen row and the note saying the plane's map was taken (else None).
@@ -116,11 +133,11 @@ def try_extrinsic(
     # a vertex whose mirror falls in a covered hole has no partner: the limit drops by the patches' share
     score_limit = ext.min_score * (1.0 - patch_share)
     passes = bool(np.isfinite(row).all() and row[-1] < ws.limit)
-    clearly = bool(np.isfinite(table[best]).all() and (row <= EXTRINSIC_CLEARLY * table[best]).all())
+    clearly = bool(np.isfinite(table[best]).all() and (row <= ext.clearly * table[best]).all())
     if passes and (plane_score >= score_limit or clearly):
         why = "" if plane_score >= score_limit else (
             f", under {score_limit:.2f}, but each test of its refined map ({np.array2string(row, precision=3)}) is "
-            f"at most {EXTRINSIC_CLEARLY:g} times the intrinsic map's"
+            f"at most {ext.clearly:g} times the intrinsic map's"
         )
         note = (
             f"map from the extrinsic reflection plane of the vertices (symmetry score {plane_score:.2f}{why}): "

@@ -70,6 +70,10 @@ class Hypotheses(Settings):
 
     hks_pairs: bool = setting(True, "also pair the feature points on HKS alone (spectral_weight 0)")
     orientation: bool = setting(True, "also fit an orientation-reversing functional map to the dense HKS")
+    sign_basis: int = setting(
+        4, "also start from C = diag(1, s) in this many first eigenfunctions, every sign vector s but all +1 (0: off)",
+        low=0, high=8,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,6 +85,10 @@ class Extrinsic(Settings):
         0.3, "least calibrated score of the plane (asymmetric clouds stay below 0.3) for its map to be used", low=0.0, high=1.0
     )
     max_points: int = setting(3000, "most vertices the plane is fitted to", low=10)
+    weak_defect: float = setting(0.5, "a chosen map whose functional defect in k eigenfunctions exceeds this is weak", low=0.0)
+    clearly: float = setting(
+        0.6, "the plane's map also replaces a weak one when each of its tests is at most this share of the weak map's", low=0.0
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,10 +100,22 @@ class Select(Settings):
         6000, "on larger meshes the sampled searches look among this many evenly spread vertices", low=50
     )
     max_distortion: float = setting(
-        0.12, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
+        0.14, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
         low=0.0, low_open=True,
     )
     max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges", low=0.0, low_open=True)
+    score_distortion: float = setting(
+        0.25, "the returned map's sampled geodesic distortion at which its score reaches 0", low=0.0, low_open=True
+    )
+    weak_score: float = setting(0.5, "below this score the result says the symmetry found is weak", low=0.0, high=1.0)
+    near_self: float = setting(
+        0.45, "share of probed vertices a map may leave within the tolerance of themselves (more: a partial identity)",
+        low=0.0, high=1.0,
+    )
+    reflects: float = setting(
+        0.5, "a hypothesis is taken for a reflection when its map reverses the orientation at this share of the sample",
+        low=0.0, high=1.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,6 +127,24 @@ class Refine(Settings):
     n_eigen: int = setting(25, "eigenfunctions of the last round (at least the top n_eigen)", low=1)
     involution: bool = setting(True, "average each round's C with its inverse's and make it an orthogonal involution")
     orientation_weight: float = setting(300.0, "weight of the orientation penalty of step 12 (0 skips the check)", low=0.0)
+    orientation_scales: tuple[float, ...] = setting((0.1, 1.0), "penalty weights tried in step 12, times orientation_weight", low=0.0)
+    keeps_orientation: float = setting(
+        0.5, "step 12 re-refines a map reversing the orientation at fewer sampled vertices than this", low=0.0, high=1.0
+    )
+    reverses_orientation: float = setting(
+        0.6, "and takes a re-refined map reversing it at at least this share", low=0.0, high=1.0
+    )
+    reoriented_near_self: float = setting(
+        0.5, "a re-refined map must leave fewer sampled vertices near themselves than this", low=0.0, high=1.0
+    )
+    rescue_distortion: float = setting(
+        1.5, "when no hypothesis passed step 9, step 12's distortion limit is this many times step 9's", low=1.0
+    )
+    orientation_max_k: int = setting(50, "step 12 is skipped above this basis (its dense penalty grows as its fourth power)", low=1)
+    before_refine_eps: float = setting(
+        0.5, "approximation of the reported thesis's map where ZoomOut's replaced it (each image at most 1 + this too far)",
+        low=0.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -116,6 +154,9 @@ class Polish(Settings):
     enabled: bool = setting(True, "polish the map (skipped when n_eigen <= refine.n_eigen)")
     max_iters: int = setting(3, "ZoomOut rounds", low=1)
     n_eigen: int = setting(40, "eigenfunctions of the last round (also raises the eigenpairs of step 2)", low=1)
+    orientation_drop: float = setting(
+        0.05, "the polished map is dropped when its reversed share falls by more than this (negative: drop every one)"
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,6 +166,10 @@ class Realign(Settings):
     enabled: bool = setting(True, "realign maps that reverse the orientation at under 90 % of the sample")
     n_anchors: int = setting(64, "anchor vertices", low=1)
     max_iters: int = setting(3, "realignment rounds", low=1)
+    below: float = setting(0.9, "the step runs on maps reversing the orientation at fewer sampled vertices than this", low=0.0)
+    gain: float = setting(
+        0.02, "a realigned map is kept when it reverses the orientation at this share more of the sample (negative: keep any)"
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,8 +192,11 @@ class IntrinsicSymmetrySettings(Settings):
     """Settings of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry` (thesis Ch. 6).
 
     Thesis values where it gives one (``k = 13``, ``h = 50``, ``d <= 25``, a large ``q``),
-    else chosen on a development split of FAUST/TOSCA. The thesis's method alone:
+    else chosen on a development split of FAUST/TOSCA (``hypotheses.sign_basis``,
+    ``select.max_distortion`` and ``select.reflects`` on SHREC'07, ``docs/design/intrinsic.md``).
+    The thesis's method alone:
     ``signs.n_uncertain = 0``, ``hypotheses.hks_pairs = hypotheses.orientation = False``,
+    ``hypotheses.sign_basis = 0``,
     ``extrinsic.enabled = refine.enabled = polish.enabled = realign.enabled = False``
     (and ``coarse.enabled = False`` to solve every vertex).
     """

@@ -27,11 +27,13 @@ from torchsym.mesh.intrinsic.hypotheses import (
     orientation_candidate,
     pair_features,
     pairing_candidates,
+    sign_basis_candidates,
+    sign_basis_image,
 )
 from torchsym.mesh.intrinsic.polish import polish
-from torchsym.mesh.intrinsic.probe import GeodesicProbe
+from torchsym.mesh.intrinsic.probe import GeodesicProbe, map_score
 from torchsym.mesh.intrinsic.realign import realign
-from torchsym.mesh.intrinsic.refine import COARSE_EPS, finish_map, refined_map, thesis_map
+from torchsym.mesh.intrinsic.refine import finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
@@ -66,13 +68,16 @@ def intrinsic_symmetry(
     5. Signs of the eigenfunctions from geodesics between pairs, ``C = diag(s)`` (Sec. 6.2.5).
     6. The correction ``R`` on SO(k) of Eq. 6.4 (Sec. 6.2.6).
     7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
-    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
-    9. Choice of a hypothesis by ZoomOut and tests of an isometric involution on a vertex sample.
+    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``), and
+       ``C = diag(1, s)`` in the first eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``).
+    9. Choice by ZoomOut on a vertex sample: the least-distorting hypothesis that reverses the
+       orientation (a reflection), else the tests of an isometric involution.
     10. The vertices' mirror plane when the chosen map is weak and the mesh has holes (``extrinsic``).
     11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
     12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
     13. ZoomOut on to ``polish.n_eigen`` eigenfunctions (``polish``).
     14. Realignment by distances to anchors (``realign``).
+    15. The map's score in [0, 1] (``result.score``), with a note when under ``select.weak_score``.
 
     Steps 4 and 8-14 go beyond the thesis (``docs/design/intrinsic.md``); the thesis's method
     alone is described in :class:`IntrinsicSymmetrySettings`.
@@ -127,7 +132,7 @@ def intrinsic_symmetry(
     timings["select"] += time.perf_counter() - tic
     extrinsic_note = None
     holed = surface.holes_closed > 0 or spectrum.has_boundary
-    if settings.extrinsic.enabled and holed and is_weak(table[best]):
+    if settings.extrinsic.enabled and holed and is_weak(table[best], settings.extrinsic.weak_defect):
         tic = time.perf_counter()
         table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
         timings["extrinsic"] = time.perf_counter() - tic
@@ -135,13 +140,18 @@ def intrinsic_symmetry(
     _choice_notes(candidates, table, best, extrinsic_note, notes)
 
     state = refined_map(ws, chosen, timings)  # step 11
-    reorient(ws, chosen, candidates, state, notes, timings)  # step 12
+    state, step_notes, seconds = reorient(ws, chosen, candidates, state)  # step 12
+    notes.extend(step_notes)
+    if seconds is not None:
+        timings["orientation_check"] = seconds
     improvable = chosen.refined is not None or state.rescued
     if plan.polish and improvable:
-        polish(ws, state, notes, timings)  # step 13
+        state, step_notes, timings["polish"] = polish(ws, state)  # step 13
+        notes.extend(step_notes)
     if plan.realign and state.full.shape[0] and improvable:
         if ws.wound:
-            realign(ws, state, notes, timings)  # step 14
+            state, step_notes, timings["realign"] = realign(ws, state)  # step 14
+            notes.extend(step_notes)
         else:
             notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
     if not np.isfinite(table[best]).all() and chosen.usable and not state.rescued:
@@ -150,9 +160,18 @@ def intrinsic_symmetry(
             "in place, or distorted geodesics by more than the limit): the thesis's map is "
             "returned unrefined and is unreliable"
         )
-    finish_map(ws, state, timings)
+    vmap, seconds = finish_map(ws, state)
+    if state.step11 is not None:
+        timings["refine"] += seconds
+    state = dataclasses.replace(state, vmap=vmap)
+    score = map_score(ws, state.vmap)
+    if score < settings.select.weak_score:
+        notes.append(
+            f"the intrinsic symmetry found is weak (score {score:.2f} < select.weak_score {settings.select.weak_score:g}): "
+            "the mesh may have no intrinsic reflection symmetry, or the map may be wrong"
+        )
     timings["total"] = time.perf_counter() - t_start
-    return _result(surface, spectrum, features.points, chosen, state, timings, notes)
+    return _result(surface, spectrum, features.points, chosen, state, score, settings.refine.before_refine_eps, timings, notes)
 
 
 def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> IntrinsicSymmetryResult:
@@ -260,6 +279,14 @@ def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: li
         (candidates, images), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
     ws.probe = probe
     timings["select"] += t_probe
+    if ws.settings.hypotheses.sign_basis >= 2:
+        tic = time.perf_counter()
+        signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis)
+        for cand in signed:
+            cand.pairs = candidates[0].pairs
+        candidates.extend(signed)
+        images.extend(sign_basis_image(ws, cand) for cand in signed)
+        timings["select"] += time.perf_counter() - tic
     return candidates, images
 
 
@@ -278,11 +305,13 @@ def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, ext
         )
 
 
-def _deferred_thesis_map(checked, chosen: Candidate) -> torch.Tensor:
-    return checked.map_to_input(torch.from_numpy(thesis_map(chosen, COARSE_EPS)[0]))
+def _deferred_thesis_map(checked, chosen: Candidate, eps: float) -> torch.Tensor:
+    return checked.map_to_input(torch.from_numpy(thesis_map(chosen, eps)[0]))
 
 
-def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, timings, notes) -> IntrinsicSymmetryResult:
+def _result(
+    surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: Candidate, state, score: float, eps: float, timings, notes
+) -> IntrinsicSymmetryResult:
     checked = surface.checked
     to_input = checked.vertex_index.numpy()
     refined = state.step11 is not None
@@ -291,7 +320,7 @@ def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: 
         functional_map=torch.from_numpy(np.ascontiguousarray(chosen.fmap)),
         rotation=torch.from_numpy(chosen.rotation),
         map_before_refine=(
-            Deferred(partial(_deferred_thesis_map, checked, chosen)) if refined
+            Deferred(partial(_deferred_thesis_map, checked, chosen, eps)) if refined
             else checked.map_to_input(torch.from_numpy(state.coarse))
         ),
         refined_functional_map=torch.from_numpy(np.ascontiguousarray(state.full)),
@@ -304,6 +333,7 @@ def _result(surface: Surface, spectrum: Spectrum, features: np.ndarray, chosen: 
         correction_converged=bool(chosen.converged),
         hypothesis=chosen.name,
         holes_closed=surface.holes_closed,
+        score=score,
         notes=tuple(notes),
     )
 
