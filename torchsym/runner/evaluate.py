@@ -54,6 +54,7 @@ import torch
 from torchsym.core.results import Result
 from torchsym.errors import InputFileError, InputValueError
 from torchsym.runner.store import read_results
+from torchsym.runner.validate import check_record, scored_means
 
 __all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_object_mask", "read_truth"]
 
@@ -356,7 +357,7 @@ def _score_superpixels(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[
         rows.append({"br_mean": float(np.mean(br)), "br_best": float(np.max(br)), "use_mean": float(np.mean(use)),
                      "use_best": float(np.min(use)), "asa_mean": float(np.mean(asa)), "asa_best": float(np.max(asa)),
                      "n_superpixels": int(len(np.unique(labels)))})
-    summary = {"superpixels": {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}}
+    summary = {"superpixels": scored_means(rows, list(rows[0]))}
     return summary, rows
 
 
@@ -405,7 +406,7 @@ def _score_segmentation(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple
     for protocol, keys in (("segmentation", ("over_image", "over_box")), ("ssm", ("auc", "precision", "recall", "f_beta_0_09", "f_beta_0_3"))):
         got = [r for r in rows if keys[0] in r]
         if got:
-            summary[protocol] = {k: float(np.mean([r[k] for r in got])) for k in keys}
+            summary[protocol] = scored_means(got, keys)
     return summary, rows
 
 
@@ -440,6 +441,7 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
     """
     records = read_results(results) if isinstance(results, (str, Path)) else list(results)
     gt = truth if isinstance(truth, GroundTruth) else read_truth(truth)
+    records = [check_record(rec, f"results[{i}]", gt.kind) for i, rec in enumerate(records)]
     pairs = [(rec, gt.find(str(rec.get("input")))) for rec in records]
     scored = [(rec, g) for rec, g in pairs if g is not None]
     if not scored:
