@@ -65,8 +65,11 @@ def field_symmetry_loss(
             )
     check_finite_here(f0, "field(points)")
     check_finite_here(f1, "field(reflected points)")
-    f0 = f0.reshape(b, 1, n, -1)
-    f1 = f1.reshape(b, k, n, -1)
+    c = 1 if f0.dim() == 2 else f0.shape[2]
+    if (1 if f1.dim() == 2 else f1.shape[2]) != c:
+        raise InputShapeError(f"field: expected the same channels on points and reflections, got {tuple(f0.shape)} and {tuple(f1.shape)}")
+    f0 = f0.reshape(b, 1, n, c)
+    f1 = f1.reshape(b, k, n, c)
     if stop_gradient == "mirror":
         f1 = f1.detach()
     elif stop_gradient == "source":

@@ -22,6 +22,8 @@ def orientation_flip_permutation(n_theta: int) -> torch.Tensor:
     """``(n_theta,)`` channel order of orientation bins after a left-right flip: bin ``k``
     (angle ``k * 180 / n_theta``) goes to ``(n_theta - k) % n_theta``."""
     n_theta = check_int(n_theta, "n_theta", minimum=1)
+    if n_theta > 1 << 20:
+        raise InputValueError(f"n_theta: expected at most {1 << 20} orientation bins, got {n_theta}")
     return (-torch.arange(n_theta)) % n_theta
 
 
@@ -76,7 +78,7 @@ def flip_consistency_loss(
     per = diff.abs() if kind == "l1" else diff**2
     dims_all = tuple(range(1, output.dim()))
     if mask is None:
-        values = per.mean(dims_all)
+        values = per.sum(dims_all) / max(1, per[:1].numel())  # the mean per entry, 0 for an empty image
     else:
         ok = isinstance(mask, torch.Tensor) and mask.dim() == output.dim() and not mask.is_complex()
         if not ok or not all(ms in (1, os) for ms, os in zip(mask.shape, output.shape)) or mask.shape[0] != output.shape[0]:

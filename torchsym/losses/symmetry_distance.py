@@ -75,8 +75,6 @@ def _brute(queries: torch.Tensor, points: torch.Tensor, valid: torch.Tensor) -> 
 
 
 def _tree(queries: torch.Tensor, points: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
-    if queries.shape[0] == 0 or queries.shape[1] == 0:
-        return torch.zeros(queries.shape[:2], dtype=torch.long, device=queries.device)
     out = []
     for q, p, v in zip(queries, points, valid):
         keep = torch.nonzero(v).squeeze(1)  # CPU tensors: no device sync
@@ -104,6 +102,8 @@ def nearest_neighbours(
     if not isinstance(queries, torch.Tensor) or queries.dim() != 3 or queries.shape[0] != points.shape[0] or queries.shape[2] != points.shape[2]:
         raise InputShapeError(f"queries: expected ({points.shape[0]}, M, {points.shape[2]}) to match points, got {_shape(queries)}")
     check_finite_here(queries, "queries")
+    if queries.shape[0] * queries.shape[1] * points.shape[1] == 0:  # nothing to search, or nothing to find
+        return torch.zeros(queries.shape[:2], dtype=torch.long, device=queries.device)
     with torch.no_grad():
         work = torch.promote_types(queries.dtype, torch.float32)
         q, p = queries.detach().to(work), points.detach().to(work)
