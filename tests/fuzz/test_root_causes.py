@@ -125,7 +125,8 @@ class TestRun:
         assert not t.is_alive(), "run hung"
         assert isinstance(box.get("exc"), InputValueError) and "workers: expected an integer >= 1" in str(box["exc"])
 
-    @pytest.mark.parametrize("name, value", [("threads_per_worker", 0), ("retries", -1), ("max_in_flight", 0),
+    @pytest.mark.parametrize("name, value", [("threads_per_worker", 0), ("threads_per_worker", 10**9), ("workers", 10**9),
+                                             ("retries", -1), ("max_in_flight", 0),
                                              ("connect_timeout", 0.0), ("connect_timeout", math.nan)])
     def test_other_options(self, tmp_path, name, value):
         with pytest.raises(InputValueError, match=name):

@@ -10,6 +10,7 @@ the others, so no NaN reaches a summary.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -23,9 +24,11 @@ __all__ = ["STATUSES", "check_record", "check_run_options", "scored_means"]
 STATUSES = ("ok", "error", "crashed")
 
 
-def _count(value: Any, name: str, minimum: int) -> int:
+def _count(value: Any, name: str, minimum: int, maximum: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise InputValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise InputValueError(f"{name}: expected at most {maximum} (4 x this machine's {os.cpu_count()} cores), got {value!r}")
     return int(value)
 
 
@@ -39,10 +42,12 @@ def check_run_options(
     connect_timeout: Any,
 ) -> None:
     """Raise :class:`InputValueError` for options of :func:`torchsym.run` that would hang
-    or fail late (``workers=0``: a cluster with nothing to run on) and
+    or fail late (``workers=0``: a cluster with nothing to run on; ``threads_per_worker``
+    of 1e9: a crash in OpenMP; both at most 4 x the machine's cores) and
     :class:`InputFileError` for an ``out`` that is a folder or lies in a missing one."""
-    _count(workers, "workers", 1)
-    _count(threads_per_worker, "threads_per_worker", 1)
+    most = 4 * (os.cpu_count() or 1)  # more would only oversubscribe; 1e9 threads crashed OpenMP
+    _count(workers, "workers", 1, most)
+    _count(threads_per_worker, "threads_per_worker", 1, most)
     _count(retries, "retries", 0)
     if max_in_flight is not None:
         _count(max_in_flight, "max_in_flight", 1)
