@@ -172,8 +172,32 @@ def campaign(args: argparse.Namespace) -> int:
             print(f"[{i + 1}] {dict(counts)}", flush=True)
             state_path.write_text(json.dumps(state, indent=1))
     state_path.write_text(json.dumps(state, indent=1))
+    (out / "campaign.md").write_text(report(state, args))
     print(f"done: {state['cases']} cases, {dict(counts)}, {len(state['failures'])} distinct failures", flush=True)
     return 0 if not state["failures"] else 1
+
+
+def report(state: dict, args: argparse.Namespace) -> str:
+    """The campaign as a markdown table: cases and failures by property, distinct failures."""
+    lines = [
+        "# Fuzz campaign (issue 50)",
+        "",
+        f"`python scripts/fuzz.py --cases {args.cases} --seed {args.seed}` (one forked process per case, 1 thread, "
+        f"{args.cpu_s} CPU s, {args.memory_gb:g} GB more address space, {args.timeout} s wall), properties of "
+        "`tests/fuzz/fuzz_properties.py`; load: " + ", ".join(f"{x:.1f}" for x in os.getloadavg()) + " at the end (2 cores shared).",
+        "",
+        f"{state['cases']} cases, {sum(f['count'] for f in state['failures'].values())} failed, "
+        f"{len(state['failures'])} distinct failures.",
+        "",
+        "| property | cases | failures | mean s per case |",
+        "|---|---|---|---|",
+    ]
+    for name, by in sorted(state["by_property"].items()):
+        lines.append(f"| {name} | {by['cases']} | {by['failures']} | {by['seconds'] / max(by['cases'], 1):.2f} |")
+    if state["failures"]:
+        lines += ["", "| failure | count | first (property, seed) |", "|---|---|---|"]
+        lines += [f"| {sig} | {f['count']} | {f['first'][0]} {f['first'][1]} |" for sig, f in state["failures"].items()]
+    return "\n".join(lines) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:
