@@ -95,11 +95,16 @@ def all_finite(obj: Any, where: str = "result") -> None:
             all_finite(getattr(obj, f.name), f"{where}.{f.name}")
     elif isinstance(obj, dict):
         for k, v in obj.items():
-            if k not in ("seconds", "timings"):
+            if not _timing(k):
                 all_finite(v, f"{where}.{k}")
     elif isinstance(obj, (list, tuple)):
         for i, v in enumerate(obj):
             all_finite(v, f"{where}[{i}]")
+
+
+def _timing(key: Any) -> bool:
+    """A field holding wall-clock times (not compared, not required finite)."""
+    return isinstance(key, str) and ("second" in key or "timing" in key or key.endswith("_time"))
 
 
 def same_bits(a: Any, b: Any, where: str = "result") -> None:
@@ -108,12 +113,12 @@ def same_bits(a: Any, b: Any, where: str = "result") -> None:
         assert isinstance(b, torch.Tensor) and _equal(a.detach(), b.detach()), f"{where} differs"
     elif dataclasses.is_dataclass(a) and not isinstance(a, type):
         for f in dataclasses.fields(a):
-            if f.name not in ("seconds", "timings"):
+            if not _timing(f.name):
                 same_bits(getattr(a, f.name), getattr(b, f.name), f"{where}.{f.name}")
     elif isinstance(a, dict):
         assert a.keys() == b.keys(), where
         for k in a:
-            if k not in ("seconds", "timings"):
+            if not _timing(k):
                 same_bits(a[k], b[k], f"{where}.{k}")
     elif isinstance(a, (list, tuple)):
         assert len(a) == len(b), where
@@ -525,6 +530,77 @@ def prop_mask_metrics(h, w, data):
             assert math.isfinite(v), f
 
 
+@given(st.integers(0, 12), st.integers(0, 12), st.data())
+def prop_superpixel_metrics(h, w, data):
+    from torchsym.metrics import superpixels as sp
+
+    labels = data.draw(tensors((h, w), [torch.int64, torch.float32, torch.bool]))
+    h2, w2 = (h, w) if data.draw(st.integers(0, 4)) else (h + 1, w)
+    truth = data.draw(tensors((h2, w2), [torch.int64, torch.uint8]))
+    image = data.draw(tensors((3, h, w), [torch.float32]))
+    show(labels=labels, truth=truth, image=image)
+    for f, args in ((sp.boundary_recall, (labels.numpy(), truth.numpy())), (sp.undersegmentation_error, (labels.numpy(), truth.numpy())),
+                    (sp.achievable_segmentation_accuracy, (labels.numpy(), truth.numpy())), (sp.explained_variation, (labels.numpy(), image)),
+                    (sp.compactness, (labels.numpy(),)), (sp.mirror_consistency, (labels.numpy(), torch.tensor([1.0, 0.0]), -w / 2))):
+        r = expect(lambda: f(*args))
+        if r is not None:
+            assert math.isfinite(r), f.__name__
+
+
+def _solver_inputs(kind: str, data) -> Any:
+    if kind == "image":
+        return data.draw(images(max_side=64))
+    n = data.draw(st.one_of(st.integers(0, 8), st.integers(20, 300)))
+    d = 3 if kind == "pointcloud" else data.draw(st.integers(1, 8))
+    pts = data.draw(tensors((n, d)))
+    if data.draw(st.booleans()) and n >= 2 and pts.is_floating_point():  # a mirror-symmetric cloud
+        half = pts[: n // 2]
+        pts = torch.cat([half, half * torch.tensor([-1.0] + [1.0] * (d - 1), dtype=pts.dtype)])
+    return pts
+
+
+DETECTORS = {
+    "reflection_plane": ("pointcloud", torchsym.detect_reflection_plane, torchsym.ReflectionPlaneSettings),
+    "pointsymm": ("points", torchsym.point_symm, torchsym.PointSymmSettings),
+    "boundary_cliques": ("image", torchsym.boundary_clique_axes, torchsym.BoundaryCliquesSettings),
+    "ksymmetry": ("image", torchsym.ksymmetry_axes, torchsym.KSymmetrySettings),
+}
+
+
+def _leaf_settings(cls: Any, prefix: str = "") -> list[tuple[str, Any]]:
+    """``(dotted name, default)`` of every setting of ``cls``, nested groups included."""
+    out = []
+    obj = cls()
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if dataclasses.is_dataclass(v):
+            out += [(f"{prefix}{f.name}.{n}", d) for n, d in _leaf_settings(type(v))]
+        elif not f.name.startswith("_"):
+            out.append((f"{prefix}{f.name}", v))
+    return out
+
+
+@given(st.sampled_from(sorted(DETECTORS)), st.data(), st.integers(0, 3))
+def prop_detector_settings(name, data, seed):
+    kind, fn, cls = DETECTORS[name]
+    x = _solver_inputs(kind, data)
+    leaves = _leaf_settings(cls)
+    kw: dict[str, Any] = {}
+    for _ in range(data.draw(st.integers(0, 2))):
+        key, default = data.draw(st.sampled_from(leaves))
+        kw[key] = data.draw(near(default))
+    nested: dict[str, Any] = {}
+    for key, v in kw.items():  # dotted names to nested overrides
+        *path, last = key.split(".")
+        node = nested
+        for p in path:
+            node = node.setdefault(p, {})
+        node[last] = v
+    if name == "pointsymm_image":
+        nested.setdefault("max_side", 64)
+    _solver_contract(fn, x, nested, seed)
+
+
 PROPERTIES = {
     "symmetry_distance": prop_symmetry_distance,
     "field_loss": prop_field_loss,
@@ -540,4 +616,6 @@ PROPERTIES = {
     "evaluate": prop_evaluate,
     "run_options": prop_run_options,
     "mask_metrics": prop_mask_metrics,
+    "superpixel_metrics": prop_superpixel_metrics,
+    "detector_settings": prop_detector_settings,
 }

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, settings
 from fuzz_properties import PROPERTIES
 
 # examples per property in CI: the slower entry points (whole solvers) get fewer
-EXAMPLES = {"symmetry_map": 12, "stylize": 8, "symm_slic": 12, "multiview_detect": 0, "run_options": 8, "evaluate": 25}
+EXAMPLES = {"detector_settings": 16, "symmetry_map": 12, "stylize": 8, "symm_slic": 12, "multiview_detect": 0, "run_options": 8, "evaluate": 25}
 
 
 @pytest.mark.parametrize("name", [n for n in PROPERTIES if EXAMPLES.get(n, 30)])
