@@ -326,3 +326,23 @@ def test_boundary_cliques_low_on_box_smoothed_noise():
     img = torch.nn.functional.avg_pool2d(torch.rand(1, 3, 240, 320, generator=_gen(0)), 9, 1, 4)
     r = torchsym.boundary_clique_axes(img[0])
     assert (float(r.scores[0]) if len(r.scores) else 0.0) < 0.3
+
+
+class TestSuperpixelMetrics:
+    def test_negative_labels(self):
+        # np.bincount refused negative labels in mirror_consistency (ValueError)
+        from torchsym.metrics.superpixels import mirror_consistency
+
+        labels = np.array([[-1, -1, -2, -2]] * 4)
+        assert mirror_consistency(labels, torch.tensor([1.0, 0.0]), -1.5) == pytest.approx(
+            mirror_consistency(labels + 5, torch.tensor([1.0, 0.0]), -1.5))
+
+    def test_non_finite_inputs(self):
+        # NaN in the image gave NaN; NaN float labels became -2^63
+        from torchsym.metrics.superpixels import boundary_recall, explained_variation
+
+        labels = np.zeros((4, 4), np.int64)
+        with pytest.raises(InputValueError, match="image: expected finite values"):
+            explained_variation(labels, np.full((3, 4, 4), np.nan))
+        with pytest.raises(InputValueError, match="labels: expected integer labels"):
+            boundary_recall(np.full((4, 4), np.nan), labels)
