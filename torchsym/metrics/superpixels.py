@@ -140,7 +140,10 @@ def mirror_consistency(labels: Any, normal: Any, offset: float, *, region: Any |
     areas as weights. 1 for exactly mirrored superpixels; any method's labels can be
     scored given an axis."""
     a = _labels(labels, "labels")
+    a = np.unique(a, return_inverse=True)[1].reshape(a.shape)  # labels 0..S-1, whatever integers came in
     n = np.asarray(normal.tolist() if isinstance(normal, torch.Tensor) else normal, dtype=np.float64)
+    if n.shape != (2,) or not np.isfinite(n).all() or not np.linalg.norm(n) > 0 or not math.isfinite(float(offset)):
+        raise InputValueError(f"normal, offset: expected a finite non-zero (2,) normal and a finite offset, got {n.tolist()} and {offset!r}")
     n = n / np.linalg.norm(n)
     b = float(offset) / 1.0
     h, w = a.shape
