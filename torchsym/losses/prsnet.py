@@ -61,7 +61,9 @@ def occupancy_grid(points: torch.Tensor, grid_size: int = 32, bound: float = 0.5
     """``(B, G, ..., G)`` float 1 where a cell holds a valid point of ``points (B, N, D)``, else 0.
 
     PRS-Net voxelises the mesh; for surface samples dense enough for the grid this is the
-    same set of cells (points outside the cube are clamped to its border cells).
+    same set of cells (points outside the cube are clamped to its border cells). Raises
+    :class:`InputValueError` for a ``grid_size`` that is not an int >= 1 with at most
+    ``MAX_CELLS`` cells, or a ``bound`` not in [1e-18, 1e18].
     """
     w = check_points(points, mask)
     b, _, d = points.shape
@@ -75,7 +77,11 @@ def occupancy_grid(points: torch.Tensor, grid_size: int = 32, bound: float = 0.5
 def closest_point_grid(
     surface: torch.Tensor, grid_size: int = 32, bound: float = 0.5, mask: torch.Tensor | None = None, *, method: str = "auto"
 ) -> torch.Tensor:
-    """``(B, G, ..., G, D)`` closest valid ``surface (B, M, D)`` point to every cell centre (no gradient)."""
+    """``(B, G, ..., G, D)`` closest valid ``surface (B, M, D)`` point to every cell centre (no gradient).
+
+    Raises :class:`InputShapeError` for a surface without points and
+    :class:`InputValueError` for a bad ``grid_size`` or ``bound`` (see :func:`occupancy_grid`).
+    """
     check_points(surface, mask, "surface")
     b, m, d = surface.shape
     grid_size, bound = check_grid(grid_size, bound, d)
