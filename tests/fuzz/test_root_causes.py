@@ -346,3 +346,11 @@ class TestSuperpixelMetrics:
             explained_variation(labels, np.full((3, 4, 4), np.nan))
         with pytest.raises(InputValueError, match="labels: expected integer labels"):
             boundary_recall(np.full((4, 4), np.nan), labels)
+
+
+def test_flip_loss_overflowing_outputs():
+    # (1e29)^2 overflowed float32: an infinite loss (found by the campaign, seed 300453)
+    a = torch.full((1, 2, 2, 2), 1e29)
+    with pytest.raises(InputValueError, match="output: expected entries below"):
+        L.flip_consistency_loss(a, torch.zeros_like(a), kind="l2")
+    assert torch.isfinite(L.flip_consistency_loss(a / 1e20, torch.zeros_like(a), kind="l2")).all()

@@ -26,19 +26,19 @@ def _shape(x: object) -> object:
     return tuple(x.shape) if isinstance(x, torch.Tensor) else type(x).__name__
 
 
-def check_finite_here(t: torch.Tensor, name: str, *, coordinates: bool = False) -> None:
+def check_finite_here(t: torch.Tensor, name: str, *, squares: int = 0) -> None:
     """:func:`~torchsym.core.checks.check_finite` for CPU tensors in eager mode (no device
-    wait); with ``coordinates``, also entries so large that squared distances between
-    reflected points overflow the dtype."""
+    wait); with ``squares`` > 0, also entries so large that a sum of ``squares`` squared
+    differences of such entries overflows the dtype."""
     if t.device.type != "cpu" or torch.compiler.is_compiling() or t.numel() == 0:
         return
     check_finite(t.detach(), name)
-    if coordinates and t.is_floating_point():
-        limit = math.sqrt(torch.finfo(t.dtype).max / max(1, t.shape[-1])) / 8
+    if squares and t.is_floating_point():
+        limit = math.sqrt(torch.finfo(t.dtype).max / squares) / 4
         big = float(t.detach().abs().amax())
         if big > limit:
-            raise InputValueError(f"{name}: expected entries below {limit:.3g} in {t.dtype} (squared distances of "
-                                  f"reflected points overflow), got {big:.3g}; rescale the input")
+            raise InputValueError(f"{name}: expected entries below {limit:.3g} in {t.dtype} (sums of squared "
+                                  f"differences overflow), got {big:.3g}; rescale the input")
 
 
 def check_points(points: torch.Tensor, mask: torch.Tensor | None, name: str = "points") -> torch.Tensor:
@@ -49,7 +49,7 @@ def check_points(points: torch.Tensor, mask: torch.Tensor | None, name: str = "p
                               + (f" of dtype {points.dtype}" if isinstance(points, torch.Tensor) else ""))
     if points.layout != torch.strided:
         raise InputShapeError(f"{name}: expected a dense tensor, got layout {points.layout}")
-    check_finite_here(points, name, coordinates=True)
+    check_finite_here(points, name, squares=max(1, points.shape[1] * points.shape[2]))
     if mask is None:
         return torch.ones(points.shape[:2], dtype=points.dtype, device=points.device)
     if not isinstance(mask, torch.Tensor) or mask.shape != points.shape[:2] or mask.is_complex():
@@ -72,7 +72,7 @@ def check_planes_for(points: torch.Tensor, normal: torch.Tensor, offset: torch.T
         raise InputShapeError(f"offset: expected {tuple(normal.shape[:2])} to match normal, got {tuple(offset.shape)}")
     normal, offset = normal.to(points.dtype), offset.to(points.dtype)
     check_finite_here(normal, "normal")
-    check_finite_here(offset, "offset", coordinates=True)
+    check_finite_here(offset, "offset", squares=max(1, points.shape[1] * points.shape[2]))
     return normal, offset
 
 

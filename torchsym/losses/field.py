@@ -63,8 +63,8 @@ def field_symmetry_loss(
             raise InputShapeError(
                 f"field: expected outputs (B, M) or (B, M, C), floating, for (B, M, D) inputs, got {_shape(f)} for {(b, m, d)}"
             )
-    check_finite_here(f0, "field(points)")
-    check_finite_here(f1, "field(reflected points)")
+    check_finite_here(f0, "field(points)", squares=max(1, f0[:1].numel()))
+    check_finite_here(f1, "field(reflected points)", squares=max(1, f0[:1].numel()))
     c = 1 if f0.dim() == 2 else f0.shape[2]
     if (1 if f1.dim() == 2 else f1.shape[2]) != c:
         raise InputShapeError(f"field: expected the same channels on points and reflections, got {tuple(f0.shape)} and {tuple(f1.shape)}")

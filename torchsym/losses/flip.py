@@ -64,8 +64,9 @@ def flip_consistency_loss(
     if (not isinstance(dims, (tuple, list)) or not all(isinstance(a, int) and not isinstance(a, bool) for a in dims)
             or not all(-nd + 2 <= a < nd and a not in (0, 1, -nd, 1 - nd) for a in dims)):
         raise InputValueError(f"dims: expected a tuple of the spatial axes (2 to {nd - 1}, or negative), got {dims!r}")
-    check_finite_here(output, "output")
-    check_finite_here(output_flipped, "output_flipped")
+    per_row = max(1, output[:1].numel())
+    check_finite_here(output, "output", squares=per_row)
+    check_finite_here(output_flipped, "output_flipped", squares=per_row)
     back = output_flipped.flip(tuple(dims))
     if channel_permutation is not None:
         c = output.shape[1]
