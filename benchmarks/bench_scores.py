@@ -272,6 +272,9 @@ def no_symmetry_markdown(rows: list[dict], skipped: dict[str, str], n: int, load
                      f"{worst[0]} ({100 * wf['at_or_above'] / max(wf['n'], 1):.0f} %, {wf['max']:.3f}) | {r['seconds']:.0f} |")
     for name, why in skipped.items():
         lines.append(f"| {name} | {SOLVERS.get(name).kind} | {why} | | | | |")
+    lines += ["", "Box-smoothed noise is `avg_pool2d(noise, 9, 1, 4)` (issue 50's case): its zero padding leaves a "
+              "dark 4-px frame on all four sides, a symmetric structure; the same noise with `count_include_pad=False`, "
+              "reflect padding or the border cropped scores 0 with boundary cliques (`docs/design/bad_input.md`)."]
     lines += ["", "## By family", "", "| detector | family | inputs | at or above 0.3 | median | max | refused |", "|---|---|---|---|---|---|---|"]
     for r in rows:
         for fam, f in r["families"].items():
