@@ -196,7 +196,7 @@ def report(state: dict, args: argparse.Namespace) -> str:
         lines.append(f"| {name} | {by['cases']} | {by['failures']} | {by['seconds'] / max(by['cases'], 1):.2f} |")
     if state["failures"]:
         lines += ["", "| failure | count | first (property, seed) |", "|---|---|---|"]
-        lines += [f"| {sig} | {f['count']} | {f['first'][0]} {f['first'][1]} |" for sig, f in state["failures"].items()]
+        lines += [f"| {sig.replace(' | ', ' / ')} | {f['count']} | {f['first'][0]} {f['first'][1]} |" for sig, f in state["failures"].items()]
     return "\n".join(lines) + "\n"
 
 
