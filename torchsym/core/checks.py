@@ -24,6 +24,7 @@ __all__ = [
     "check_points",
     "check_positive",
     "check_scale",
+    "check_unit_range",
     "scale_problem",
 ]
 
@@ -200,6 +201,19 @@ def check_image(image: Any, name: str = "image", *, min_size: int = 1) -> torch.
     elif src_dtype is not None and src_dtype in (torch.uint16, np.dtype("uint16")):
         t = t / 65535.0
     return check_finite(t, name)
+
+
+def check_unit_range(t: torch.Tensor, name: str, *, tol: float = 1e-3) -> torch.Tensor:
+    """Raise :class:`InputValueError` unless the values of ``t`` lie in [0, 1] (to ``tol``);
+    return ``t`` clamped to [0, 1]. For float images, whose methods read [0, 1] intensities
+    (a 0-255 float image would silently saturate)."""
+    if t.numel():
+        lo, hi = float(t.min()), float(t.max())
+        if lo < -tol or hi > 1 + tol:
+            raise InputValueError(
+                f"{name}: expected intensities in [0, 1] (or a uint8 image), got values in [{lo:.4g}, {hi:.4g}]"
+            )
+    return t.clamp(0, 1)
 
 
 def check_int(value: Any, name: str, *, minimum: int | None = None) -> int:

@@ -104,8 +104,15 @@ def _range_text(meta: Mapping[str, Any]) -> str:
     return " and ".join(parts)
 
 
+# A float setting enters float32 arithmetic, often squared (a sigma, a tolerance): its
+# magnitude must keep its square a normal float32 number, or 0.
+FLOAT_MAGNITUDE = (1e-18, 1e18)
+
+
 def _in_range(value: float, meta: Mapping[str, Any]) -> bool:
     if isinstance(value, float) and not math.isfinite(value):
+        return False
+    if isinstance(value, float) and value != 0 and not FLOAT_MAGNITUDE[0] <= abs(value) <= FLOAT_MAGNITUDE[1]:
         return False
     low, high = meta.get("low"), meta.get("high")
     if low is not None and (value <= low if meta["low_open"] else value < low):
@@ -156,6 +163,12 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
     if hint is float:
         if isinstance(value, (int, float)) and not isinstance(value, bool) and _in_range(float(value), meta):
             return float(value)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value != 0:
+            if not FLOAT_MAGNITUDE[0] <= abs(value) <= FLOAT_MAGNITUDE[1]:
+                raise ConfigError(
+                    f"{path}: expected 0 or a magnitude in [{FLOAT_MAGNITUDE[0]:g}, {FLOAT_MAGNITUDE[1]:g}] "
+                    f"(its square a normal float32 number), got {value!r}"
+                )
         raise ConfigError(f"{path}: expected a finite number{_with_range(meta)}, got {value!r}")
     if hint is str:
         if isinstance(value, str):

@@ -13,8 +13,7 @@ from collections.abc import Callable
 import torch
 
 from torchsym.errors import InputShapeError, InputValueError
-from torchsym.geometry.conventions import check_planes
-from torchsym.losses._common import check_points, check_reduction, masked_mean, reduce
+from torchsym.losses._common import _shape, check_finite_here, check_planes_for, check_points, check_reduction, masked_mean, reduce
 from torchsym.losses.symmetry_distance import reflect_batch
 
 __all__ = ["field_symmetry_loss"]
@@ -42,9 +41,14 @@ def field_symmetry_loss(
         stop_gradient: ``"none"``, ``"mirror"`` (no gradient through ``f(S x)``: the
             mirrored value is the target) or ``"source"`` (none through ``f(x)``).
         reduction: ``"none"`` gives ``(B, K)``; ``"mean"`` / ``"sum"`` a scalar.
+
+    A zero normal compares ``f(x)`` with itself (0, finite gradients). Raises
+    :class:`InputShapeError` for shapes that do not match (the field's outputs too) and
+    :class:`InputValueError` for NaN or infinite inputs or field values (CPU tensors
+    outside ``torch.compile``) or an unknown option.
     """
     w = check_points(points, mask)
-    check_planes(normal, offset, points.shape[-1])
+    normal, offset = check_planes_for(points, normal, offset)
     check_reduction(reduction)
     if kind not in ("l1", "l2"):
         raise InputValueError(f"kind: expected 'l1' or 'l2', got {kind!r}")
@@ -54,10 +58,18 @@ def field_symmetry_loss(
     k = normal.shape[1]
     f0 = field(points)
     f1 = field(reflect_batch(points, normal, offset).reshape(b, k * n, d))
-    if f0.shape[:2] != (b, n) or f1.shape[:2] != (b, k * n):
-        raise InputShapeError(f"field: expected outputs (B, M) or (B, M, C) for (B, M, D) inputs, got {tuple(f0.shape)} for {(b, n, d)}")
-    f0 = f0.reshape(b, 1, n, -1)
-    f1 = f1.reshape(b, k, n, -1)
+    for f, m in ((f0, n), (f1, k * n)):
+        if not isinstance(f, torch.Tensor) or f.dim() not in (2, 3) or f.shape[:2] != (b, m) or not f.is_floating_point():
+            raise InputShapeError(
+                f"field: expected outputs (B, M) or (B, M, C), floating, for (B, M, D) inputs, got {_shape(f)} for {(b, m, d)}"
+            )
+    check_finite_here(f0, "field(points)", squares=max(1, f0[:1].numel()))
+    check_finite_here(f1, "field(reflected points)", squares=max(1, f0[:1].numel()))
+    c = 1 if f0.dim() == 2 else f0.shape[2]
+    if (1 if f1.dim() == 2 else f1.shape[2]) != c:
+        raise InputShapeError(f"field: expected the same channels on points and reflections, got {tuple(f0.shape)} and {tuple(f1.shape)}")
+    f0 = f0.reshape(b, 1, n, c)
+    f1 = f1.reshape(b, k, n, c)
     if stop_gradient == "mirror":
         f1 = f1.detach()
     elif stop_gradient == "source":

@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 
 from torchsym.errors import InputShapeError
-from torchsym.losses._common import check_reduction, reduce
+from torchsym.losses._common import _shape, check_finite_here, check_reduction, reduce, unit_planes
 
 __all__ = ["orthogonality_loss"]
 
@@ -23,17 +23,24 @@ def orthogonality_loss(normal: torch.Tensor, plane_mask: torch.Tensor | None = N
         normal: ``(B, K, D)`` normals (any non-zero length).
         plane_mask: ``(B, K)`` 1 for planes taking part (rows and columns of absent ones dropped).
         reduction: ``"none"`` gives ``(B,)``; ``"mean"`` / ``"sum"`` a scalar.
+
+    A zero normal counts as the zero vector (its row of ``N N^T - I`` is ``-e_k``: the
+    loss is largest there, with finite gradients). Raises :class:`InputShapeError` for a
+    bad shape and :class:`InputValueError` for NaN or infinite normals (CPU tensors
+    outside ``torch.compile``).
     """
-    if not isinstance(normal, torch.Tensor) or normal.dim() != 3:
-        raise InputShapeError(f"normal: expected a (B, K, D) tensor, got {getattr(normal, 'shape', type(normal).__name__)}")
+    if not isinstance(normal, torch.Tensor) or normal.dim() != 3 or not normal.is_floating_point() or normal.shape[-1] < 1:
+        raise InputShapeError(f"normal: expected a (B, K, D) floating tensor with D >= 1, got {_shape(normal)}")
     check_reduction(reduction)
-    n = normal / normal.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    check_finite_here(normal, "normal")
+    n, _ = unit_planes(normal, normal.new_zeros(normal.shape[:-1]))
     gram = n @ n.transpose(-1, -2)  # (B, K, K)
     eye = torch.eye(n.shape[1], dtype=n.dtype, device=n.device)
     diff = gram - eye
     if plane_mask is not None:
-        if plane_mask.shape != normal.shape[:2]:
-            raise InputShapeError(f"plane_mask: expected {tuple(normal.shape[:2])}, got {tuple(plane_mask.shape)}")
+        if not isinstance(plane_mask, torch.Tensor) or plane_mask.shape != normal.shape[:2] or plane_mask.is_complex():
+            raise InputShapeError(f"plane_mask: expected a real {tuple(normal.shape[:2])} tensor, got {_shape(plane_mask)}")
+        check_finite_here(plane_mask.to(n.dtype), "plane_mask")
         m = plane_mask.to(n.dtype)
         diff = diff * m.unsqueeze(-1) * m.unsqueeze(-2)
     return reduce((diff**2).sum((-1, -2)), reduction)

@@ -19,9 +19,18 @@ from __future__ import annotations
 
 import torch
 
-from torchsym.errors import InputValueError
-from torchsym.geometry.conventions import check_planes
-from torchsym.losses._common import check_points, check_reduction, masked_mean, reduce
+from torchsym.errors import InputShapeError, InputValueError
+from torchsym.losses._common import (
+    _shape,
+    check_finite_here,
+    check_planes_for,
+    check_points,
+    check_reduction,
+    check_threshold,
+    masked_mean,
+    reduce,
+    unit_planes,
+)
 from torchsym.matching.knn import KNNIndex
 
 __all__ = ["KINDS", "nearest_neighbours", "reflect_batch", "robust_kernel", "symmetry_distance"]
@@ -32,10 +41,9 @@ _BRUTE_BLOCK = 1 << 24  # distances per brute-force block
 
 def reflect_batch(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tensor) -> torch.Tensor:
     """``(B, K, N, D)`` reflections of ``points (B, N, D)`` through ``K`` planes
-    ``normal (B, K, D)``, ``offset (B, K)``; the normals are normalised here (no check)."""
-    norm = normal.norm(dim=-1, keepdim=True)
-    n = normal / norm
-    b = offset / norm.squeeze(-1)
+    ``normal (B, K, D)``, ``offset (B, K)``; the normals are normalised here (no check) by
+    :func:`~torchsym.losses._common.unit_planes`: a zero normal reflects every point onto itself."""
+    n, b = unit_planes(normal, offset)
     signed = torch.einsum("bnd,bkd->bkn", points, n) + b.unsqueeze(-1)  # (B, K, N)
     return points.unsqueeze(1) - 2.0 * signed.unsqueeze(-1) * n.unsqueeze(2)
 
@@ -45,7 +53,7 @@ def robust_kernel(sq: torch.Tensor, kind: str, threshold: float) -> torch.Tensor
     ``"robust"`` Geman-McClure ``t^2 r^2 / (r^2 + t^2)`` (about ``r^2`` below ``t``, at most ``t^2``)."""
     if kind == "l2":
         return sq
-    t2 = threshold * threshold
+    t2 = check_threshold(threshold) ** 2
     if kind == "truncated":
         return sq.clamp_max(t2)
     if kind == "robust":
@@ -90,6 +98,12 @@ def nearest_neighbours(
     """
     if method not in ("auto", "tree", "brute"):
         raise InputValueError(f"method: expected 'auto', 'tree' or 'brute', got {method!r}")
+    check_points(points, mask)
+    if not isinstance(queries, torch.Tensor) or queries.dim() != 3 or queries.shape[0] != points.shape[0] or queries.shape[2] != points.shape[2]:
+        raise InputShapeError(f"queries: expected ({points.shape[0]}, M, {points.shape[2]}) to match points, got {_shape(queries)}")
+    check_finite_here(queries, "queries")
+    if queries.shape[0] * queries.shape[1] * points.shape[1] == 0:  # nothing to search, or nothing to find
+        return torch.zeros(queries.shape[:2], dtype=torch.long, device=queries.device)
     with torch.no_grad():
         work = torch.promote_types(queries.dtype, torch.float32)
         q, p = queries.detach().to(work), points.detach().to(work)
@@ -124,7 +138,14 @@ def symmetry_distance(
 
     Returns:
         ``(B, K)`` losses (or a scalar), in squared points' units, differentiable in
-        ``points``, ``normal`` and ``offset``.
+        ``points``, ``normal`` and ``offset``. A zero normal gives 0 (the reflection is the
+        identity) with finite gradients; pair with :func:`orthogonality_loss`, which is
+        largest there. An empty batch or cloud gives zeros.
+
+    Raises:
+        InputShapeError: shapes that do not match, non-floating points.
+        InputValueError: NaN or infinite entries (CPU tensors outside ``torch.compile``),
+            an unknown ``kind`` / ``reduction`` / ``method``, a threshold outside [1e-18, 1e18].
 
     Example:
         >>> p = torch.tensor([[[1.0, 0.0], [-1.0, 0.0], [0.0, 2.0]]])
@@ -132,10 +153,12 @@ def symmetry_distance(
         tensor([[0.]])
     """
     w = check_points(points, mask)
-    check_planes(normal, offset, points.shape[-1])
+    normal, offset = check_planes_for(points, normal, offset)
     check_reduction(reduction)
     if kind not in KINDS:
         raise InputValueError(f"kind: expected one of {KINDS}, got {kind!r}")
+    if kind != "l2":
+        check_threshold(threshold)
     bsz, k, n, d = points.shape[0], normal.shape[1], points.shape[1], points.shape[2]
     refl = reflect_batch(points, normal, offset)  # (B, K, N, D)
     idx = nearest_neighbours(refl.reshape(bsz, k * n, d), points, mask, method=method)  # (B, K N)

@@ -33,6 +33,10 @@ def _labels(x: Any, name: str) -> np.ndarray:
     a = x.detach().cpu().numpy() if isinstance(x, torch.Tensor) else np.asarray(x)
     if a.ndim != 2 or a.size == 0:
         raise InputShapeError(f"{name}: expected an (H, W) label map, got shape {a.shape}")
+    if not (np.issubdtype(a.dtype, np.number) or a.dtype == np.bool_) or np.issubdtype(a.dtype, np.complexfloating):
+        raise InputShapeError(f"{name}: expected integer labels, got dtype {a.dtype}")
+    if np.issubdtype(a.dtype, np.floating) and not (np.isfinite(a).all() and (a == np.round(a)).all() and np.abs(a).max() < 2**62):
+        raise InputValueError(f"{name}: expected integer labels, got non-integer, NaN or infinite values")
     return a.astype(np.int64)
 
 
@@ -98,6 +102,8 @@ def explained_variation(labels: Any, image: Any) -> float:
     a = _labels(labels, "labels")
     im = image.detach().cpu().double().numpy() if isinstance(image, torch.Tensor) else np.asarray(image, dtype=np.float64)
     im = im[None] if im.ndim == 2 else im
+    if not np.isfinite(im).all():
+        raise InputValueError("image: expected finite values")
     if im.shape[1:] != a.shape:
         raise InputShapeError(f"labels, image: expected (H, W) and (C, H, W), got {a.shape} and {im.shape}")
     _, ai = np.unique(a, return_inverse=True)
@@ -134,7 +140,10 @@ def mirror_consistency(labels: Any, normal: Any, offset: float, *, region: Any |
     areas as weights. 1 for exactly mirrored superpixels; any method's labels can be
     scored given an axis."""
     a = _labels(labels, "labels")
+    a = np.unique(a, return_inverse=True)[1].reshape(a.shape)  # labels 0..S-1, whatever integers came in
     n = np.asarray(normal.tolist() if isinstance(normal, torch.Tensor) else normal, dtype=np.float64)
+    if n.shape != (2,) or not np.isfinite(n).all() or not np.linalg.norm(n) > 0 or not math.isfinite(float(offset)):
+        raise InputValueError(f"normal, offset: expected a finite non-zero (2,) normal and a finite offset, got {n.tolist()} and {offset!r}")
     n = n / np.linalg.norm(n)
     b = float(offset) / 1.0
     h, w = a.shape

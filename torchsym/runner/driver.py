@@ -26,6 +26,7 @@ from torchsym.io.inputs import Source, expand_inputs
 from torchsym.runner.engine import ENGINES, open_engine
 from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key, read_results
 from torchsym.runner.task import TaskSpec
+from torchsym.runner.validate import check_run_options
 
 __all__ = ["RunSummary", "expand_inputs", "run"]
 
@@ -164,6 +165,8 @@ def run(
         EngineError: the Dask scheduler cannot be reached.
     """
     t0 = time.perf_counter()
+    check_run_options(out=out, workers=workers, threads_per_worker=threads_per_worker, retries=retries,
+                      max_in_flight=max_in_flight, connect_timeout=connect_timeout)
     if max_inline is not None and (isinstance(max_inline, bool) or not isinstance(max_inline, int) or max_inline < 0):
         raise InputValueError(f"max_inline: expected a count >= 0 or None, got {max_inline!r}")
     for name in imports:  # they may register the config's solvers

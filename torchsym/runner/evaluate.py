@@ -56,6 +56,7 @@ import torch
 from torchsym.core.results import Result
 from torchsym.errors import InputFileError, InputValueError
 from torchsym.runner.store import read_results
+from torchsym.runner.validate import check_record, scored_means
 
 __all__ = ["Evaluation", "GroundTruth", "evaluate", "format_evaluation", "read_object_mask", "read_truth", "result_scorer"]
 
@@ -360,7 +361,7 @@ def _score_superpixels(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[
         rows.append({"br_mean": float(np.mean(br)), "br_best": float(np.max(br)), "use_mean": float(np.mean(use)),
                      "use_best": float(np.min(use)), "asa_mean": float(np.mean(asa)), "asa_best": float(np.max(asa)),
                      "n_superpixels": int(len(np.unique(labels)))})
-    summary = {"superpixels": {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}}
+    summary = {"superpixels": scored_means(rows, list(rows[0]))}
     return summary, rows
 
 
@@ -391,7 +392,8 @@ def _ssm_row(rec: Mapping[str, Any], obj: np.ndarray) -> dict[str, float]:
 
 
 def _segmentation_summary(rows: list[dict[str, Any]], protocol: str) -> dict[str, dict[str, float]]:
-    return {protocol: {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}} if rows else {}
+    """Means over the rows that could be scored, with ``n_unscored`` (:func:`scored_means`)."""
+    return {protocol: scored_means(rows, list(rows[0]))} if rows else {}
 
 
 def _score_masks(pairs: Sequence[tuple[Mapping[str, Any], Any]]) -> tuple[dict[str, dict[str, float]], list[dict[str, Any]]]:
@@ -480,6 +482,7 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
     """
     records = read_results(results) if isinstance(results, (str, Path)) else list(results)
     gt = truth if isinstance(truth, GroundTruth) else read_truth(truth)
+    records = [check_record(rec, f"results[{i}]", gt.kind) for i, rec in enumerate(records)]
     pairs = [(rec, gt.find(str(rec.get("input")))) for rec in records]
     scored = [(rec, g) for rec, g in pairs if g is not None]
     if not scored:

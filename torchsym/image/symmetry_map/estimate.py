@@ -19,7 +19,7 @@ from typing import Any
 import torch
 import torch.nn.functional as F
 
-from torchsym.core.checks import check_image
+from torchsym.core.checks import check_image, check_unit_range
 from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
@@ -48,7 +48,7 @@ def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float
     img = check_image(image, "image")
     if img.shape[0] != 1:
         raise InputShapeError(f"image: expected one image (C, H, W) or (1, C, H, W), got a batch of shape {tuple(img.shape)}")
-    img = img.float()
+    img = check_unit_range(img.float(), "image")
     h, w = img.shape[-2:]
     if max_side is None or max(h, w) <= max_side:
         return img, 1.0

@@ -48,7 +48,7 @@ class ClusteringSettings(Settings):
 class DescriptorSettings(Settings):
     """Dense descriptors at the cluster's axis orientation (a departure from per-pixel SIFT, see the package docstring)."""
 
-    cell_px: float = setting(4.0, "side of one of the 4 x 4 spatial cells", unit="px", low=1.0)
+    cell_px: float = setting(4.0, "side of one of the 4 x 4 spatial cells", unit="px", low=1.0, high=64.0)
     n_dims: int = setting(32, "dimensions kept by the mirror-equivariant PCA (128: no reduction)", low=2, high=128)
 
 

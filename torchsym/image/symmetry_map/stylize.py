@@ -24,7 +24,7 @@ import torch
 from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
-from torchsym.errors import InputValueError
+from torchsym.errors import InputShapeError, InputValueError
 from torchsym.image.symmetry_map.result import StylizedResult, SymmetryMapResult
 from torchsym.image.symmetry_map.settings import StylizeSettings
 
@@ -124,6 +124,10 @@ def stylize(
         raise InputValueError(f"result: expected a SymmetryMapResult (the symmetry_map step's output), got {type(result).__name__}")
     settings = resolve_settings(StylizeSettings, settings, overrides)
     image, score = result.image, result.score_map  # (C, H, W), (H, W)
+    if min(image.shape[-2:]) < settings.region_px:  # OpenCV's SLIC crashes the process on a smaller image
+        raise InputShapeError(
+            f"result.image: expected height and width >= region_px = {settings.region_px}, got {tuple(image.shape)}"
+        )
     labels = slic_labels(image, settings.region_px, settings.ruler, settings.n_slic_iters)
     n0 = int(labels.max()) + 1
     lab = torch.from_numpy(labels.astype(np.int64)).reshape(-1)

@@ -28,7 +28,7 @@ class MirrorPairSettings(Settings):
     min_support: float = setting(
         0.4, "least share of the edge pixels around an axis's pairs that have a mirror edge pixel (within 1.5 px) for the axis to be kept", low=0.0, high=1.0
     )
-    edge_sigma: float = setting(2.0, "Gaussian smoothing of the edge detector", unit="px", low=0.5)
+    edge_sigma: float = setting(2.0, "Gaussian smoothing of the edge detector", unit="px", low=0.5, high=8.0)
     min_edge_length: int = setting(20, "shortest boundary chain kept", unit="px", low=4)
 
 

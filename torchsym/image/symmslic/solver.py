@@ -83,7 +83,7 @@ def _init_centres(
     lowest gradient of the pair)."""
     _, h, w = lab.shape
     g = slic_grid(h, w, step)
-    a = torch.from_numpy(region[g[:, 1].long(), g[:, 0].long()])
+    a = torch.from_numpy(np.asarray(region[g[:, 1].long().numpy(), g[:, 0].long().numpy()]).reshape(-1))
     side = torch.zeros(len(g), dtype=g.dtype)
     if len(normals):
         side = torch.where(a >= 0, (g * normals[a.clamp(min=0)]).sum(1) + offsets[a.clamp(min=0)], side)
