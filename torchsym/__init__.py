@@ -46,6 +46,8 @@ from torchsym.errors import (
 )
 from torchsym.geometry.mesh import Mesh
 from torchsym.image import (
+    AxisStage,
+    AxisStageSettings,
     BoundaryCliqueDetector,
     BoundaryCliquesSettings,
     ImageAxisResult,
@@ -61,6 +63,7 @@ from torchsym.image import (
     SymmSlic,
     SymmSlicResult,
     boundary_clique_axes,
+    image_axes,
     ksymmetry_axes,
     point_symm_image,
     stylize,
@@ -97,6 +100,7 @@ __all__ = [
     "ReflectionPlanesDetector", "detect_reflection_planes", "ReflectionPlanesResult", "ReflectionPlanesSettings",
     "PointSymm", "point_symm", "PointSymmResult", "PointSymmSettings",
     "IntrinsicSymmetry", "intrinsic_symmetry", "IntrinsicSymmetryResult", "IntrinsicSymmetrySettings",
+    "AxisStage", "image_axes", "AxisStageSettings",
     "BoundaryCliqueDetector", "boundary_clique_axes", "ReflectionAxesResult", "ReflectionAxesBatch",
     "BoundaryCliquesSettings",
     "KSymmetryDetector", "ksymmetry_axes", "KSymmetrySettings",

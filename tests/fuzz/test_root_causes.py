@@ -180,7 +180,7 @@ class TestEvaluate:
         cv2.imwrite(str(truth / "a.png"), full)
         cv2.imwrite(str(truth / "b.png"), np.zeros((8, 8), np.uint8))
         score = (full > 0).astype(np.float32)
-        recs = [{"input": f"/p/{n}.png", "status": "ok", "result": {"score_map": score.tolist()}} for n in "ab"]
+        recs = [{"input": f"/p/{n}.png", "status": "ok", "result": {"type": "SymmetryMapResult", "score_map": score.tolist()}} for n in "ab"]
         ev = torchsym.evaluate(recs, truth)
         ssm = ev.summary["ssm"]
         assert ssm["n_unscored"] == 1 and ssm["auc"] == 1.0
