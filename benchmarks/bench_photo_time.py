@@ -7,7 +7,7 @@ included), after one warm-up call per config. A config given as ``NAME@WxH`` get
 resized to ``W x H`` first (as a tensor), for targets stated at a size (SymmSLIC: 640 x 480).
 
 Usage: python benchmarks/bench_photo_time.py [--data DIR] [--threads 1]
-       [--configs configs/image_boundary_cliques.yaml configs/image_symmslic.yaml@640x480]
+       [--configs configs/image_axes.yaml configs/image_symmslic.yaml@640x480 configs/image_symmetry_map.yaml@640x480]
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import torchsym
 from torchsym.io import read_image
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_CONFIGS = ["configs/image_boundary_cliques.yaml", "configs/image_symmslic.yaml@640x480"]
+DEFAULT_CONFIGS = ["configs/image_axes.yaml", "configs/image_symmslic.yaml@640x480", "configs/image_symmetry_map.yaml@640x480"]
 
 
 def _input(path: Path, size: tuple[int, int] | None):
