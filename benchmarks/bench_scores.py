@@ -34,7 +34,9 @@ in 3 to 20 dimensions. Writes ``scores_no_symmetry.md`` and ``.json``.
 from __future__ import annotations
 
 import argparse
+import json
 import logging
+import os
 import statistics
 import time
 from pathlib import Path
@@ -302,7 +304,7 @@ def main_no_symmetry(args: argparse.Namespace) -> None:
     md = no_symmetry_markdown(rows, skipped, n, load)
     print(md)
     out = args.out
-    out.mkdir(exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     (out / "scores_no_symmetry.md").write_text(md)
     (out / "scores_no_symmetry.json").write_text(json.dumps({"threshold": THRESHOLD, "n_per_family": n, "rows": rows,
                                                               "skipped": skipped, "load": load}, indent=1))
