@@ -48,6 +48,7 @@ class TestCLI:
         assert main(["demo", "--out", str(blocker / "sub")]) == 2
         assert "--out: cannot create the folder" in capsys.readouterr().err
 
+    @pytest.mark.slow
     def test_never_overwrites_an_input(self, tmp_path, capsys):
         import shutil
 
@@ -65,6 +66,7 @@ class TestCLI:
         hidden = [q.name for q in tmp_path.iterdir() if q.name.startswith(".")]
         assert hidden == [".torchsym-outputs.json"]  # staging folders removed, the manifest kept
 
+    @pytest.mark.slow
     def test_inputs_sharing_a_stem_keep_their_own_results(self, tmp_path, capsys):
         import shutil
 
@@ -119,6 +121,7 @@ class TestCLIFiles:
         assert code == 1 and "would overwrite the input" in line and "scan.json" in line
         assert cfg.read_bytes() == before
 
+    @pytest.mark.slow
     def test_second_run_over_its_own_outputs(self, tmp_path, capsys):
         _small_cloud(tmp_path / "scan.xyz")
         for _ in range(2):
@@ -181,6 +184,7 @@ class TestCLIFiles:
 
 
 class TestInputsAsUsersHaveThem:
+    @pytest.mark.slow
     def test_cad_mesh_gets_its_plane_with_no_flags(self, tmp_path, capsys):
         import math
 
@@ -215,6 +219,7 @@ class TestInputsAsUsersHaveThem:
         assert torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000}).data)
         assert not torch_equal(a.data, prepare(mesh, cfg, overrides={"surface.points": 3000, "surface.seed": 1}).data)
 
+    @pytest.mark.slow
     def test_multiview_folder_reproduces_the_function(self, tmp_path, capsys):
         from test_contract import _scene_folder
 

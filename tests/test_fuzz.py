@@ -340,6 +340,7 @@ def test_cli_in_process(fuzz_dir, file):
 @_fuzz(1)
 @given(st.lists(st.tuples(st.sampled_from([".off", ".obj", ".ply", ".npy", ".png"]), st.binary(min_size=1, max_size=200)),
                 min_size=3, max_size=3))
+@pytest.mark.slow
 def test_cli_subprocess(fuzz_dir, files):
     """``python -m torchsym detect FOLDER`` over junk files (one process, its start-up is slow):
     exit code 1 (inputs failed), one error line per file and a summary, no traceback, files unchanged."""

@@ -34,6 +34,7 @@ class TestPointSymmImage:
         assert abs(abs(float(res.offset)) - 47.5) < 1.0
         assert res.score > 0.7 and res.segment.shape == (2, 2)
 
+    @pytest.mark.slow
     def test_seeded(self):
         a, b = point_symm_image(symmetric_image(1)), point_symm_image(symmetric_image(1))
         assert torch.equal(a.normal, b.normal) and torch.equal(a.inliers, b.inliers)
@@ -74,10 +75,12 @@ class TestPointSymmImage:
 class TestPointSymmImageScore:
     """Issue 31: noise and smoothed noise score low, a mirrored image high."""
 
+    @pytest.mark.slow
     def test_noise_low(self):
         g = torch.Generator().manual_seed(3)
         assert point_symm_image(torch.rand(1, 64, 64, generator=g)).score < 0.3
 
+    @pytest.mark.slow
     def test_smoothed_noise_low(self):
         g = torch.Generator().manual_seed(3)
         noise = torch.rand(1, 1, 100, 100, generator=g)

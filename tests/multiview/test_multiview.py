@@ -124,6 +124,7 @@ class TestDetectMultiviewPlane:
         assert len(result.cameras.image_names) == 6 and result.points.shape[1] == 3
         json.dumps(result.to_dict(), allow_nan=False)
 
+    @pytest.mark.slow
     def test_no_symmetry_reported(self):
         s = symmetric_scene(6, height=360, width=480, symmetric=False, generator=torch.Generator().manual_seed(2))
         r = detect_multiview_plane(s.images)
@@ -137,6 +138,7 @@ class TestDetectMultiviewPlane:
         a.pop("timings"), b.pop("timings")
         assert a == b
 
+    @pytest.mark.slow
     def test_artifacts(self, result, scene, tmp_path):
         from torchsym.viz import write_artifacts
 

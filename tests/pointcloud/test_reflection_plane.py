@@ -125,6 +125,7 @@ class TestDetectReflectionPlane:
         res = detect_reflection_plane(c.points)
         assert _deg(res.normal, c.normal) < 1.0
 
+    @pytest.mark.slow
     def test_perturbation(self):
         c = perturb(planted_symmetric_cloud(3000, generator=10), 20.0, generator=2)
         res = detect_reflection_plane(c.points)

@@ -74,6 +74,7 @@ class TestKernelStage:
         assert torch.equal(on.normal, off.normal) and torch.equal(on.offset, off.offset)
         assert on.timings["kernel"] < 0.01
 
+    @pytest.mark.slow
     def test_perturbed_clouds_are_found_more_often(self):
         """Thesis 5.2.4's perturbation (w = 50): right planes 5 of 6 with the stage, 3 without."""
         right = {True: 0, False: 0}
@@ -104,6 +105,7 @@ class TestKernelStage:
             res = detect_reflection_plane(pts, kernel={"enabled": True})
             assert torch.isfinite(res.normal).all()
 
+    @pytest.mark.slow
     def test_result_describes_the_returned_plane(self):
         """After the stage, residual and inliers come from the returned plane, and the score rose step by step."""
         cloud = planted_symmetric_cloud(1000, generator=0, dtype=torch.float64)
@@ -155,6 +157,7 @@ class TestKernelStage:
         res = detect_reflection_plane(noisy)
         assert res.timings["kernel"] == 0.0 and math.degrees(float(plane_angle(res.normal, cloud.normal))) < 0.1
 
+    @pytest.mark.slow
     def test_perturbed_clouds_with_outliers(self):
         """w = 20 and 200 % outliers: the stage, on the dense part, finds 4 of 4 planes within
         3 degrees; Algorithm 6's nearest-neighbour pairs alone 1 (on the whole cloud the

@@ -132,6 +132,7 @@ class TestPointSymm:
         assert torch.allclose(res.normal, torch.tensor([1.0, 0.0], dtype=DT))
         assert abs(float(res.offset) + 1.0) < 1e-12
 
+    @pytest.mark.slow
     def test_noisy_set_multistart(self):
         # sigma = 0.03 in the unit cube: on this set the thesis's single start (n_starts=1,
         # no scan) ends in a wrong plane; the pair search's other starts find it
@@ -144,6 +145,7 @@ class TestPointSymm:
         with pytest.raises(ConfigError, match="init.n_starts: expected an int >= 1"):
             point_symm(s.points, init={"n_starts": 0})
 
+    @pytest.mark.slow
     @pytest.mark.parametrize(("d", "seed", "sigma2"), [(3, 505, 1e-3), (3, 500, 3e-3), (6, 501, 1e-2)])
     def test_noisy_set_scan(self, d, seed, sigma2):
         # noise near the point spacing: every start of the pair search ends in a wrong
@@ -161,6 +163,7 @@ class TestPointSymm:
         with pytest.raises(ConfigError, match="scan.n_starts: expected an int >= 1"):
             point_symm(s.points, scan={"n_starts": 0})
 
+    @pytest.mark.slow
     def test_scan_skipped_on_exact_symmetry_and_warm_start(self, monkeypatch):
         # an exact symmetry scores 1 after the pair search (at most match_fraction when only
         # that share may match): the scan does not run; nor after a caller's start
@@ -178,6 +181,7 @@ class TestPointSymm:
         noisy = planted(300, 3, 500, sigma2=3e-3)
         point_symm(noisy.points, initial=(noisy.normal, noisy.offset))
 
+    @pytest.mark.slow
     def test_flat_set_not_its_trivial_mirror(self):
         # a symmetric set in the plane z = 0 of 3-D space is also its own mirror across that
         # plane; the scan must not return it
@@ -188,6 +192,7 @@ class TestPointSymm:
         assert math.degrees(float(plane_angle(res.normal, truth))) < 2.0
         assert float((res.permutation == torch.arange(300)).double().mean()) < 0.5
 
+    @pytest.mark.slow
     def test_set_in_a_proper_subspace(self):
         # an exact symmetric set of R^3 placed in a 3-D affine subspace of R^7: solved inside
         # its hull, the plane comes back in R^7 with the same mirrors
@@ -210,6 +215,7 @@ class TestPointSymm:
         warm = point_symm(x, initial=(tilt, -float(tilt @ (q @ (-s.offset * s.normal) + shift))))
         assert math.degrees(float(plane_angle(warm.normal, res.normal))) < 1e-6
 
+    @pytest.mark.slow
     def test_thin_set_is_not_flattened(self):
         # a slab 5e-5 thick, mirror-symmetric across it, in float32: the thin extent is real
         # (far above float32 rounding), so the symmetry across it must be found
@@ -266,6 +272,7 @@ class TestPointSymm:
         with pytest.raises((InputShapeError, InputValueError), match=text):
             point_symm(planted(20, 3, 0).points, initial=initial)
 
+    @pytest.mark.slow
     def test_no_symmetry_low_score(self):
         pts = torch.rand(80, 3, generator=gen(13), dtype=DT)
         res = point_symm(pts)
@@ -328,6 +335,7 @@ class TestPointSymmModule:
         assert isinstance(res, PointSymmResult)
 
 
+@pytest.mark.slow
 def test_auto_assignment_exact_for_partial_sets():
     # full matching: sparse above max_exact_points; with a cardinality limit, which the sparse
     # solver only approximates, exact up to four times as many points
@@ -340,6 +348,7 @@ def test_auto_assignment_exact_for_partial_sets():
     assert point_symm(cut, match_fraction=0.85, assignment={"max_exact_points": 100}, generator=gen(0)).assignment == "sparse"
 
 
+@pytest.mark.slow
 def test_scan_runs_the_alternation_from_scan_n_starts_planes(monkeypatch):
     # when the scan runs, the alternation starts from at most scan.n_starts scanned planes
     # besides the pair search's starts, and normal_scan is asked for that many

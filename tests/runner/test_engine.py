@@ -20,6 +20,7 @@ def _by_name(path: Path) -> dict[str, dict]:
     return {Path(r["input"]).name: r for r in read_results(path, arrays=False)}
 
 
+@pytest.mark.slow
 class TestLocalCluster:
     def test_crashes_retries_and_errors(self, tmp_path, markers):
         # two ordinary inputs, one that kills its worker once, one that kills it every
@@ -82,6 +83,7 @@ class TestSeparateScheduler:
         with local_cluster(2, 1) as cluster:
             yield cluster
 
+    @pytest.mark.slow
     def test_same_records_serial_and_dask(self, tmp_path, cluster):
         folder = tmp_path / "in"
         folder.mkdir()
