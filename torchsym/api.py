@@ -19,6 +19,7 @@ from torchsym.core.results import Result
 from torchsym.errors import ConfigError, InputShapeError, InputValueError
 from torchsym.geometry.mesh import Mesh
 from torchsym.io.inputs import Source, expand_inputs
+from torchsym.io.objects import from_user_object
 from torchsym.io.read import infer_kind, load_input
 
 __all__ = ["Prepared", "detect", "prepare", "solve"]
@@ -170,7 +171,10 @@ def prepare(
 
 def _in_memory(x: Any) -> Any:
     """A tensor or array input as a dense, detached tensor of its own dtype (uint8 images
-    stay uint8, so the image check scales them); other inputs unchanged."""
+    stay uint8, so the image check scales them); the objects of trimesh, Open3D and PIL and
+    ``(H, W, 3)`` photo arrays converted by :func:`~torchsym.io.objects.from_user_object`;
+    other inputs unchanged."""
+    x = from_user_object(x)
     if isinstance(x, np.ndarray):
         t = as_tensor(x, "input")
         return torch.from_numpy(np.ascontiguousarray(x)) if x.dtype in (np.uint8, np.uint16) else t
@@ -197,8 +201,10 @@ def detect(
         input: a file path (point cloud, mesh or image); a folder, a list of photo paths
             or a glob (the photos of one scene, for ``multiview``); a tensor or array
             (``(N, 3)`` point cloud, ``(N, D)`` point set, ``(C, H, W)`` or
-            ``(B, C, H, W)`` image, ``(V, C, H, W)`` photos with ``kind="multiview"``);
-            or a :class:`torchsym.mesh.Mesh`.
+            ``(B, C, H, W)`` image, an ``(H, W, 3)`` uint8 photo as OpenCV and PIL give
+            it, ``(V, C, H, W)`` photos with ``kind="multiview"``); a
+            :class:`torchsym.mesh.Mesh`; or a ``trimesh.Trimesh`` / ``PointCloud``, an
+            Open3D ``TriangleMesh`` / ``PointCloud`` or a ``PIL.Image``.
         config: a YAML path, a mapping, or a :class:`PipelineConfig`; None uses the
             default pipeline for the input's kind (:func:`prepare` says how a mesh
             is routed).

@@ -308,10 +308,13 @@ def infer_kind(data: Any) -> str:
             return "pointcloud" if data.shape[1] == 3 else "points"
         if data.dim() in (3, 4) and data.shape[-3] in (1, 3):
             return "image"
+        hint = " (an (H, W, C) photo array must be uint8 or uint16 to be read as channels-last)" if data.dim() == 3 else ""
         raise InputShapeError(
-            f"input: expected (N, D) points, (C, H, W) or (B, C, H, W) image, or a Mesh, got {tuple(data.shape)}"
+            f"input: expected (N, D) points, (C, H, W) or (B, C, H, W) image, or a Mesh, got {tuple(data.shape)}{hint}"
         )
-    raise InputShapeError(f"input: expected a path, tensor, array or Mesh, got {type(data).__name__}")
+    raise InputShapeError(
+        f"input: expected a path, tensor, array, Mesh, trimesh or Open3D geometry or PIL image, got {type(data).__name__}"
+    )
 
 
 def load_input(path: str | Path, kind: str | None = None, *, max_points: int = MAX_POINTS,
