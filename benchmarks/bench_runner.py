@@ -475,8 +475,8 @@ def evaluate_row(dataset: str, out: Path, truth: Path) -> dict[str, Any]:
     from torchsym.runner import evaluate
 
     ev = evaluate(out, truth)
-    print(f"  {dataset}: {ev.summary}", flush=True)
-    return {"dataset": dataset, "n_scored": ev.n_scored, "summary": ev.summary}
+    print(f"  {dataset}: {ev.figures}", flush=True)
+    return {"dataset": dataset, "n_scored": ev.n_scored, "summary": ev.figures}
 
 
 def _stage_cells(r: dict[str, Any]) -> str:

@@ -169,10 +169,42 @@ class TestSolverContract:
         for t in _leaves(r):
             if t.is_floating_point():
                 assert bool(torch.isfinite(t).all())
-        for name in ("score",):
-            if hasattr(r, name):
-                s = float(getattr(r, name))
-                assert 0.0 <= s <= 1.0 and not math.isnan(s)
+        s = float(r.score)  # every solver's result has one
+        assert 0.0 <= s <= 1.0 and not math.isnan(s)
+        assert r.to_dict()["score"] == pytest.approx(s)
+
+    def test_summary_is_one_line(self, entry):
+        line = _run(entry, _input(entry.kind)).summary()
+        assert line.startswith(type(_run(entry, _input(entry.kind))).__name__ + ": ") and "\n" not in line
+
+    def test_saved_json_loads_back_typed(self, entry, tmp_path):
+        r = _run(entry, _input(entry.kind))
+        r.to_json(tmp_path / "r.json")
+        required = [f.name for f in dataclasses.fields(r)
+                    if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+        if not all(name in r.to_dict() for name in required):
+            with pytest.raises(torchsym.InputValueError, match="needs field"):  # a summary, not every field
+                torchsym.load_result(tmp_path / "r.json")
+            return
+        back = torchsym.load_result(tmp_path / "r.json")
+        assert type(back) is type(r)
+        _close(back.to_dict(), json.loads((tmp_path / "r.json").read_text()))  # floats come back as float32
+
+
+def _close(a, b, where="result"):
+    """``a`` and ``b`` equal in structure, numbers to float32 precision."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), where
+        for k in a:
+            _close(a[k], b[k], f"{where}.{k}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            _close(x, y, f"{where}[{i}]")
+    elif isinstance(a, float) and isinstance(b, (int, float)):
+        assert a == pytest.approx(b, rel=1e-6, abs=1e-6), where
+    else:
+        assert a == b, where
 
     def test_to_round_trips(self, entry):
         r = _run(entry, _input(entry.kind))

@@ -34,7 +34,7 @@ from torchsym import (
 from torchsym.api import detect
 from torchsym.core.config import Pipeline, PipelineConfig, build_pipeline, load_config
 from torchsym.core.registry import SOLVERS, register_solver
-from torchsym.core.results import Result
+from torchsym.core.results import Result, load_result
 from torchsym.core.settings import Settings, Solver
 from torchsym.errors import (
     ConfigError,
@@ -113,7 +113,7 @@ __all__ = [
     "Mesh", "add_outliers", "make_symmetric_pointset", "planted_symmetric_cloud",
     # one call, configs, registry, shapes
     "detect", "Pipeline", "PipelineConfig", "build_pipeline", "load_config",
-    "SOLVERS", "register_solver", "Result", "Settings", "Solver",
+    "SOLVERS", "register_solver", "Result", "load_result", "Settings", "Solver",
     # errors
     "TorchsymError", "ConfigError", "InputFileError", "InputShapeError", "InputValueError", "SolverError",
     # dataset runner

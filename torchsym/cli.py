@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -37,29 +38,6 @@ def _resolve(p: Path) -> Path:
         return p.resolve()
     except (OSError, RuntimeError):
         return p.absolute()
-
-
-def _summary(d: dict[str, Any]) -> str:
-    """One line of a result's ``to_dict()``; image axes say which were accepted."""
-    if isinstance(d.get("accepted"), list) and isinstance(d.get("scores"), list):
-        kept = [round(float(s), 3) for s, a in zip(d["scores"], d["accepted"]) if a]
-        if not kept:
-            best = max(d["scores"], default=0.0)
-            return f"{d['type']}: no axis accepted ({len(d['scores'])} candidates, best score {best:.3f})"
-        return f"{d['type']}: {len(kept)} axis accepted, scores={kept}" if len(kept) == 1 else \
-            f"{d['type']}: {len(kept)} axes accepted, scores={kept}"
-    keys = [k for k in ("normal", "offset", "found", "score", "scores", "axes", "map", "pairs", "converged", "iterations") if k in d]
-    parts = []
-    for k in keys:
-        v = d[k]
-        if isinstance(v, float):
-            v = round(v, 4)
-        elif isinstance(v, list) and v and isinstance(v[0], float):
-            v = [round(x, 4) for x in v]
-        elif isinstance(v, list) and len(v) > 4:
-            v = f"[{len(v)} entries]"
-        parts.append(f"{k}={v}")
-    return f"{d['type']}: " + ", ".join(parts)
 
 
 def _out_dir(text: str) -> Path:
@@ -197,7 +175,7 @@ def detect_files(
                     _fail(f"{source.name}: {exc}")
                     continue
                 records.append(record)
-                print(f"{spec.stem}: {_summary(outcome['result'])} ({outcome['seconds']:.3f} s)")
+                print(f"{spec.stem}: {outcome['summary']} ({outcome['seconds']:.3f} s)")
                 for w in paths:
                     print(f"  wrote {w}")
     finally:
@@ -239,6 +217,18 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0 if err < 1.0 else 1
 
 
+def _cmd_configs(args: argparse.Namespace) -> int:
+    from torchsym.core.config import CONFIG_DIR, list_configs
+
+    configs = list_configs()
+    width = max((len(n) for n in configs), default=0)
+    for name, text in configs.items():
+        head = re.split(r": |\.\s(?=[A-Z])", text)[0].rstrip(".")  # the first clause
+        print(f"{name:<{width}}  {head if len(head) <= 100 else head[:99] + '...'}")
+    print(f"({len(configs)} configs in {CONFIG_DIR}; give --config a name or a path to a YAML file of your own)")
+    return 0
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from torchsym.bench import quick_pointcloud_benchmark
 
@@ -269,12 +259,12 @@ def _parser() -> argparse.ArgumentParser:
             "Detect reflection symmetry. The pipeline is chosen from each input's kind "
             "(point cloud: reflection plane; mesh: intrinsic symmetry map, or the reflection plane of its surface "
             "when it is not one manifold piece; image: symmetry axes) unless --config names a YAML pipeline "
-            "(see configs/). The serial case of `torchsym run`: exit code 0 when every input succeeds, 1 when "
+            "(`torchsym configs` lists them). The serial case of `torchsym run`: exit code 0 when every input succeeds, 1 when "
             "some failed, 2 for bad arguments."
         ),
     )
     d.add_argument("inputs", nargs="+", metavar="INPUT", help=_INPUTS_HELP)
-    d.add_argument("--config", help="YAML pipeline file (input kind, steps with solver names and params)")
+    d.add_argument("--config", help="an installed config's name (see `torchsym configs`) or a YAML pipeline file")
     d.add_argument("--out", default="torchsym-out", help="folder for <name>.json and the pictures (default: %(default)s)")
     d.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting of the last solver (repeatable)")
     d.add_argument("--kind", choices=USER_KINDS, help="treat inputs as this kind (e.g. pointcloud: a mesh sampled on its surface; mesh: the intrinsic pipeline)")
@@ -292,6 +282,10 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--n", type=int, default=30000, help="points per cloud (default: %(default)s)")
     b.add_argument("--repeats", type=int, default=5, help="clouds timed (default: %(default)s)")
     b.set_defaults(func=_cmd_bench)
+
+    c = sub.add_parser("configs", help="list the configs installed with the package, one line each",
+                       description="List the pipelines installed with torchsym; --config takes their names.")
+    c.set_defaults(func=_cmd_configs)
 
     from torchsym.runner.cli import add_parsers
 

@@ -29,6 +29,38 @@ class TestConfigs:
         assert pipe.input_kind in ("pointcloud", "points", "image", "mesh", "multiview")
 
 
+class TestConfigsByName:
+    def test_installed_configs_are_the_repository_folder(self):
+        from torchsym.core.config import CONFIG_DIR, list_configs
+
+        assert sorted(list_configs()) == [p.stem for p in CONFIGS]
+        assert all(text for text in list_configs().values()), "every config has a description"
+        assert CONFIG_DIR.resolve() == CONFIGS[0].parent.resolve()
+
+    @pytest.mark.parametrize("name", ["pointcloud_plane", "pointcloud_plane.yaml"])
+    def test_name_or_path(self, name, tmp_path, monkeypatch):
+        monkeypatch.chdir(tmp_path)  # no configs/ folder here: the name alone finds it
+        want = load_config(CONFIGS[0].parent / "pointcloud_plane.yaml")
+        got = load_config(name)
+        assert (got.input, got.steps, got.source) == (want.input, want.steps, name)
+
+    def test_a_local_file_wins_over_a_name(self, tmp_path, monkeypatch):
+        monkeypatch.chdir(tmp_path)
+        (tmp_path / "pointcloud_plane.yaml").write_text("input: points\nsteps: [pointsymm]\n")
+        assert load_config("pointcloud_plane.yaml").input == "points"
+
+    def test_unknown_name_lists_the_installed(self):
+        with pytest.raises(InputFileError, match="did you mean 'pointcloud_plane'.*installed: image_axes"):
+            load_config("pointcloud_plan")
+
+    def test_cli_lists_them(self, capsys):
+        from torchsym.cli import main
+
+        assert main(["configs"]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        assert len(lines) == len(CONFIGS) + 1 and lines[0].startswith("image_axes ")
+
+
 class TestLoadConfig:
     def test_unknown_top_key(self):
         with pytest.raises(ConfigError, match=r"unknown key 'step' \(did you mean 'steps'\?\)"):

@@ -182,7 +182,7 @@ class TestEvaluate:
         score = (full > 0).astype(np.float32)
         recs = [{"input": f"/p/{n}.png", "status": "ok", "result": {"type": "SymmetryMapResult", "score_map": score.tolist()}} for n in "ab"]
         ev = torchsym.evaluate(recs, truth)
-        ssm = ev.summary["ssm"]
+        ssm = ev.figures["ssm"]
         assert ssm["n_unscored"] == 1 and ssm["auc"] == 1.0
         assert ev.items[1]["auc"] is None
         text = json.dumps(ev.to_dict())

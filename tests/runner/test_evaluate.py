@@ -37,7 +37,7 @@ class TestPlanes:
                                    for n, v in [("a.ply", [1, 0, 0]), ("b.ply", [0, 1, 0]), ("c", [0, 0, 1]), ("d.ply", [1, 0, 0])]))
         ev = evaluate(results, truth)
         assert (ev.kind, ev.n_records, ev.n_scored, ev.n_failed, ev.n_no_truth) == ("pointcloud", 5, 4, 1, 1)
-        plane = ev.summary["plane"]
+        plane = ev.figures["plane"]
         # 2 correct of 3 detections, 4 planes: P = 2/3, R = 1/2, F = 4/7
         assert plane["precision"] == pytest.approx(2 / 3) and plane["recall"] == pytest.approx(0.5)
         assert plane["f"] == pytest.approx(4 / 7)
@@ -68,7 +68,7 @@ class TestAxes:
         truth.write_text("# image x1 y1 x2 y2\ni1.png 50 0 50 100\ni2.png 10 0 10 100\ni2.png 0 20 100 20\ni3.png 30 0 30 100\n")
         ev = evaluate(results, truth)
         assert (ev.kind, ev.n_scored) == ("image", 3)
-        thesis, challenge = ev.summary["thesis"], ev.summary["challenge"]
+        thesis, challenge = ev.figures["thesis"], ev.figures["challenge"]
         # thesis: 2 of 4 detections right, 4 axes: P = R = F = 1/2; best threshold 4: P = 1, R = 1/2
         assert (thesis["precision"], thesis["recall"], thesis["f"]) == pytest.approx((0.5, 0.5, 0.5))
         assert thesis["max_f"] == pytest.approx(2 / 3)
@@ -118,8 +118,8 @@ class TestMeshes:
         assert rows["m1.off"]["rate"] == 1.0 and rows["m2.off"]["rate"] == pytest.approx(1 / 3)
         assert rows["m1.off"]["threshold"] == pytest.approx(math.sqrt(16 / (20 * math.pi)))
         assert rows["m3.off"]["rate"] == 0.0
-        assert ev.summary["mesh"]["mesh_rate"] == pytest.approx(1 / 3)  # only m1 above 75 %
-        assert ev.summary["mesh"]["mean_rate"] == pytest.approx(4 / 9)
+        assert ev.figures["mesh"]["mesh_rate"] == pytest.approx(1 / 3)  # only m1 above 75 %
+        assert ev.figures["mesh"]["mean_rate"] == pytest.approx(4 / 9)
 
 
 def _bsds_mat(path, segmentations):
@@ -159,7 +159,7 @@ class TestSuperpixels:
         assert a["use_best"] == 0.0 and a["use_mean"] == pytest.approx(0.5)
         assert a["br_best"] == 1.0 and a["n_superpixels"] == 2
         assert b["asa_mean"] == 0.0 and b["use_mean"] == 1.0  # failed: the worst values
-        assert ev.summary["superpixels"]["asa_mean"] == pytest.approx(0.375)
+        assert ev.figures["superpixels"]["asa_mean"] == pytest.approx(0.375)
 
     def test_record_without_labels(self, tmp_path):
         truth = tmp_path / "gt"
@@ -199,7 +199,7 @@ class TestSegmentation:
         # the crash finds nothing: 8 wrong
         assert (ev.kind, a["over_image"], a["over_box"]) == ("segmentation", 1 / 16, 1 / 8)
         assert (b["over_image"], b["over_box"]) == (0.5, 1.0)
-        assert ev.summary["segmentation"]["over_image"] == pytest.approx((1 / 16 + 0.5) / 2)
+        assert ev.figures["segmentation"]["over_image"] == pytest.approx((1 / 16 + 0.5) / 2)
 
 
 class TestSymmetryMap:
@@ -222,7 +222,7 @@ class TestSymmetryMap:
         a, b = ev.items
         assert (a["auc"], a["precision"], a["recall"]) == (1.0, 1.0, 1.0)
         assert b["recall"] == 0.0 and b["auc"] == 0.5  # a failed input: an all-zero map
-        assert set(ev.summary) == {"ssm"} and ev.summary["ssm"]["recall"] == 0.5
+        assert set(ev.figures) == {"ssm"} and ev.figures["ssm"]["recall"] == 0.5
 
     def test_score_map_in_the_sink(self):
         import torch

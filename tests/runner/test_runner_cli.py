@@ -26,7 +26,7 @@ class TestRunCommand:
         text = capsys.readouterr().out
         assert "pointcloud: 2 inputs scored" in text and "| plane |" in text
         ev = json.loads((tmp_path / "ev.json").read_text())
-        assert ev["summary"]["plane"]["f"] == 1.0 and len(ev["items"]) == 2
+        assert ev["figures"]["plane"]["f"] == 1.0 and len(ev["items"]) == 2
         assert isinstance(json.loads(out.read_text().splitlines()[0])["result"]["pairs"], list)  # 600 <= 1024
         apart = tmp_path / "apart.jsonl"
         assert main([*args[:5], str(apart), *args[6:], "--max-inline", "64"]) == 0

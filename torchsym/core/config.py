@@ -29,9 +29,47 @@ from torchsym.core.registry import INPUT_KINDS, SOLVERS, SolverEntry
 from torchsym.errors import ConfigError, InputFileError, TorchsymError
 
 __all__ = [
-    "Pipeline", "PipelineConfig", "StepConfig", "SurfaceSampling", "build_pipeline", "default_config", "load_config",
-    "load_yaml", "parse_overrides",
+    "Pipeline", "PipelineConfig", "StepConfig", "SurfaceSampling", "build_pipeline", "config_path", "default_config",
+    "list_configs", "load_config", "load_yaml", "parse_overrides",
 ]
+
+#: the configs installed with the package (``torchsym/configs/*.yaml``; ``configs/`` of a
+#: source checkout is the same folder)
+CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs"
+
+
+def list_configs() -> dict[str, str]:
+    """``{name: description}`` of the configs installed with the package, by name."""
+    out = {}
+    for path in sorted(CONFIG_DIR.glob("*.yaml")):
+        try:
+            raw = yaml.safe_load(path.read_text())
+        except (OSError, yaml.YAMLError):
+            continue
+        text = raw.get("description", "") if isinstance(raw, Mapping) else ""
+        out[path.stem] = " ".join(str(text).split())
+    return out
+
+
+def config_path(config: str | Path) -> Path:
+    """The file a config argument names: an existing path as given; otherwise a name
+    (``pointcloud_plane``, with or without ``.yaml``) of a config installed with the package.
+
+    Raises:
+        InputFileError: neither a file nor the name of an installed config (the names are
+            listed).
+    """
+    path = Path(config)
+    if path.is_file():
+        return path
+    name = path.name[: -len(path.suffix)] if path.suffix in (".yaml", ".yml") else path.name
+    if str(path) in (path.name, name + ".yaml", name + ".yml") and (CONFIG_DIR / f"{name}.yaml").is_file():
+        return CONFIG_DIR / f"{name}.yaml"
+    names = sorted(list_configs())
+    raise InputFileError(
+        f"config: file {str(path)!r} does not exist and is not the name of an installed config"
+        f"{_suggest(name, names)}; installed: {', '.join(names) or 'none'}"
+    )
 
 _TOP_KEYS = {"input", "steps", "description", "surface"}
 _STEP_KEYS = {"name", "params"}
@@ -222,7 +260,8 @@ def _check_params(entry: SolverEntry, params: Mapping[str, Any], where: str) -> 
 
 
 def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
-    """Read and validate a config from a YAML file path or a mapping.
+    """Read and validate a config from a YAML file path, an installed config's name
+    (:func:`config_path`, e.g. ``"pointcloud_plane"``) or a mapping.
 
     Raises:
         InputFileError: the file does not exist or cannot be read as text.
@@ -230,10 +269,8 @@ def load_config(config: str | Path | Mapping[str, Any]) -> PipelineConfig:
     """
     source = "<dict>"
     if isinstance(config, (str, Path)):
-        path = Path(config)
-        source = str(path)
-        if not path.is_file():
-            raise InputFileError(f"config: file {str(path)!r} does not exist")
+        path = config_path(config)
+        source = str(config)
         try:
             text = path.read_text()
         except (OSError, UnicodeDecodeError) as exc:

@@ -58,13 +58,20 @@ class ReflectionAxesResult(Result):
         """``(A, 4)`` the accepted axes, best first."""
         return self.axes[self.accepted]
 
+    @property
+    def score(self) -> float:
+        """The photo's symmetry score in [0, 1]: the best accepted axis's score, or the best
+        candidate's when none was accepted (then below the stage's threshold), 0 without one."""
+        return float(self.scores.max().clamp(0, 1)) if len(self) else 0.0
+
     def summary(self) -> str:
         """One line: how many axes were accepted and their scores, or that none was."""
         n = int(self.accepted.sum())
         if n == 0:
-            return f"no axis accepted ({len(self)} candidates, best score {float(self.scores.max()) if len(self) else 0.0:.3f})"
+            return f"{type(self).__name__}: no axis accepted ({len(self)} candidates, best score {float(self.scores.max()) if len(self) else 0.0:.3f})"
         scores = ", ".join(f"{float(s):.3f}" for s in self.scores[self.accepted])
-        return f"{n} axis accepted (score {scores})" if n == 1 else f"{n} axes accepted (scores {scores})"
+        head = f"{type(self).__name__}: "
+        return head + (f"1 axis accepted (score {scores})" if n == 1 else f"{n} axes accepted (scores {scores})")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -60,7 +60,7 @@ def add_parsers(sub: Any) -> None:
             "Rerunning skips the inputs done with the same file and config, and re-runs crashed ones."
         ),
     )
-    r.add_argument("config", metavar="CONFIG", help="YAML pipeline file (see configs/)")
+    r.add_argument("config", metavar="CONFIG", help="an installed config's name (`torchsym configs` lists them) or a YAML pipeline file")
     r.add_argument("--inputs", nargs="+", required=True, metavar="GLOB",
                    help="files, folders or glob patterns (quote them: 'scans/**/*.ply'); for a multiview config, "
                         "a folder of photos is one scene and a folder of folders one scene per folder")

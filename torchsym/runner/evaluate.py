@@ -206,7 +206,7 @@ class Evaluation(Result):
         n_scored: records with ground truth, scored.
         n_failed: of those, records with status ``error`` or ``crashed`` (counted as missed).
         n_no_truth: records without ground truth (left out).
-        summary: the figures of the data set, by protocol (e.g. ``{"thesis": {"max_f":
+        figures: the figures of the data set, by protocol (e.g. ``{"thesis": {"max_f":
             ..., "precision": ..., "recall": ..., "f": ...}, "challenge": {...}}``).
         items: one row per scored input (``input``, ``status`` and its figures).
         truth: the ground-truth file or folder.
@@ -217,7 +217,7 @@ class Evaluation(Result):
     n_scored: int
     n_failed: int
     n_no_truth: int
-    summary: dict[str, dict[str, float]]
+    figures: dict[str, dict[str, float]]
     items: list[dict[str, Any]]
     truth: str
 
@@ -503,9 +503,9 @@ def format_evaluation(ev: Evaluation) -> str:
         f"{ev.kind}: {ev.n_scored} inputs scored against {ev.truth} ({ev.n_failed} failed, "
         f"{ev.n_no_truth} without ground truth)",
     ]
-    keys = sorted({k for figs in ev.summary.values() for k in figs})
+    keys = sorted({k for figs in ev.figures.values() for k in figs})
     lines.append("| protocol | " + " | ".join(keys) + " |")
     lines.append("|---" * (len(keys) + 1) + "|")
-    for name, figs in ev.summary.items():
+    for name, figs in ev.figures.items():
         lines.append(f"| {name} | " + " | ".join(f"{figs[k]:.3f}" if k in figs else "" for k in keys) + " |")
     return "\n".join(lines)

@@ -77,7 +77,8 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
     mesh sampled on its surface, the pipeline chosen for it); ``config`` is the pipeline
     run, as :meth:`PipelineConfig.to_dict` gives it; ``stages`` the wall seconds of
     ``read`` (reading and checking the input), ``solve``, ``record`` (``to_dict``) and
-    ``figures``, for the engine's breakdown.
+    ``figures``, for the engine's breakdown; ``summary`` the result's one line
+    (:meth:`Result.summary`).
     """
     import cv2
     import torch
@@ -88,7 +89,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         cv2.setNumThreads(spec.threads)
     out: dict[str, Any] = {
         "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
-        "notes": [], "config": None,
+        "notes": [], "config": None, "summary": None,
     }
     stages = out["stages"] = {}
     t0 = time.perf_counter()
@@ -108,6 +109,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         data = prepared.data
         out["seconds"] = time.perf_counter() - t0
         stages["solve"] = out["seconds"] - stages["read"]
+        out["summary"] = result.summary()
         if spec.max_inline is None:
             out["result"] = result.to_dict()
         else:

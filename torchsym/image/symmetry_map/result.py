@@ -60,6 +60,12 @@ class SymmetryMapResult(Result):
             return torch.zeros(self.image.shape[-2:], dtype=self.image.dtype, device=self.image.device)
         return self.ssm.max(0).values
 
+    @property
+    def score(self) -> float:
+        """The photo's symmetry score in [0, 1]: the mean of :attr:`score_map`, the share of
+        the picture explained by a mirror (0 without an axis)."""
+        return float(self.score_map.float().mean().clamp(0, 1)) if self.ssm.numel() else 0.0
+
     def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
         """A JSON summary; with ``sink`` (a dataset run) also ``score_map``, the ``(H, W)``
         highest score over the axes at map resolution, as an array in the sink. The maps
@@ -68,6 +74,7 @@ class SymmetryMapResult(Result):
             "type": type(self).__name__,
             "map_size": list(self.ssm.shape[-2:]) if self.ssm.dim() == 3 else list(self.image.shape[-2:]),
             "n_axes": len(self),
+            "score": self.score,
             "lines": to_jsonable(self.lines),
             "scores": [float(s.mean()) for s in self.ssm],
             "n_pairs": int(self.pairs.shape[0]),
@@ -101,6 +108,14 @@ class StylizedResult(Result):
     n_superpixels: int
     notes: tuple[str, ...] = ()
 
+    @property
+    def score(self) -> float:
+        """The mean region score over the picture's pixels, in [0, 1] (0 without regions)."""
+        if not self.region_scores.numel():
+            return 0.0
+        weights = torch.bincount(self.labels.flatten(), minlength=self.region_scores.numel()).to(self.region_scores)
+        return float((weights * self.region_scores).sum() / weights.sum().clamp_min(1))
+
     def to_dict(self, sink: ArraySink | None = None, name: str = "") -> dict[str, Any]:
         """A JSON summary (no large arrays, so ``sink`` is unused; the picture is written by
         the picture writer)."""
@@ -109,6 +124,7 @@ class StylizedResult(Result):
             "image_size": list(self.image.shape[-2:]),
             "n_superpixels": self.n_superpixels,
             "n_regions": int(self.region_scores.numel()),
+            "score": self.score,
             "min_region_score": float(self.region_scores.min()) if self.region_scores.numel() else None,
             "mean_region_score": float(self.region_scores.mean()) if self.region_scores.numel() else None,
             "notes": list(self.notes),

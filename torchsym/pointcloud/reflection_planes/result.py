@@ -57,6 +57,11 @@ class ReflectionPlanesResult(Result):
     timings: dict[str, float]
 
     @property
+    def score(self) -> float:
+        """The shape's symmetry score in [0, 1]: the best plane's, 0 without a plane."""
+        return float(self.scores.max()) if self.scores.numel() else 0.0
+
+    @property
     def n_planes(self) -> int:
         """Planes found (axes of revolution not counted)."""
         return int(self.normals.shape[0])
