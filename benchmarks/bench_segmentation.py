@@ -71,7 +71,7 @@ from torchsym.io import read_image
 from torchsym.metrics.masks import best_reflection_iou
 from torchsym.metrics.superpixels import segmentation_error
 from torchsym.metrics.symmetry_map import ssm_scores
-from torchsym.runner.evaluate import read_object_mask
+from torchsym.runner.truth import read_object_mask
 
 ROOT = Path(__file__).resolve().parents[1]
 LIST = ROOT / "benchmarks" / "data" / "symmetric_masks.txt"

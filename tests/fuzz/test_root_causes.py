@@ -136,8 +136,14 @@ class TestRun:
         # IsADirectoryError from deep inside
         with pytest.raises(InputFileError, match="out: expected the path of a results file, got the folder"):
             torchsym.run(REPO / "configs" / "pointcloud_plane.yaml", [_cloud(tmp_path)], tmp_path)
-        with pytest.raises(InputFileError, match="does not exist"):
-            torchsym.run(REPO / "configs" / "pointcloud_plane.yaml", [_cloud(tmp_path)], tmp_path / "no" / "r.jsonl")
+        (tmp_path / "file").write_text("x")
+        with pytest.raises(InputFileError, match="is a file, not a folder"):
+            torchsym.run(REPO / "configs" / "pointcloud_plane.yaml", [_cloud(tmp_path)], tmp_path / "file" / "r.jsonl")
+
+    def test_out_in_a_missing_folder_is_made(self, tmp_path):
+        out = tmp_path / "no" / "such" / "r.jsonl"
+        assert torchsym.run(REPO / "configs" / "pointcloud_plane.yaml", [_cloud(tmp_path)], out).n_ok == 1
+        assert out.is_file()
 
 
 def _planes_truth(tmp_path):

@@ -24,10 +24,23 @@ class TestExpandInputs:
         _xyz(tmp_path / "a.xyz")
         _xyz(tmp_path / ".hidden.xyz")
         (tmp_path / "photo.png").write_bytes(b"")
-        got = expand_inputs(str(tmp_path))
-        assert [Path(s.name).name for s in got] == ["a.xyz", "photo.png"]  # no kind: every known file
+        got = expand_inputs([str(tmp_path / "a.xyz"), str(tmp_path / "photo.png")])
+        assert [Path(s.name).name for s in got] == ["a.xyz", "photo.png"]  # no kind: every known file named
         got = expand_inputs(str(tmp_path), "pointcloud")
         assert [Path(s.name).name for s in got] == ["a.xyz"] and "photo.png" in got[0].notes[0]
+
+    def test_a_folder_gives_the_kind_most_of_its_files_are(self, tmp_path):
+        for name in ("b.png", "a.jpg"):
+            (tmp_path / name).write_bytes(b"")
+        np.savetxt(tmp_path / "axes.txt", [[0, 0, 1, 1]])  # a photo folder's ground truth
+        got = expand_inputs(str(tmp_path))
+        assert [Path(s.name).name for s in got] == ["a.jpg", "b.png"]
+        assert "axes.txt" in got[0].notes[0] and "most of its files are photos" in got[0].notes[0]
+        for name in ("c.xyz", "d.xyz", "e.xyz"):
+            _xyz(tmp_path / name)
+        got = expand_inputs(str(tmp_path))  # now 4 files of points (axes.txt reads as one) to 2 photos
+        assert [Path(s.name).suffix for s in got] == [".txt", ".xyz", ".xyz", ".xyz"]
+        assert "b.png" in got[0].notes[0]
 
     def test_skips_earlier_outputs(self, tmp_path):
         _xyz(tmp_path / "a.xyz")

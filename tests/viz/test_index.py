@@ -96,17 +96,24 @@ class TestWriteIndex:
         page = _parse(path)
         assert len(page.rows) == len(records)
         names = [r["cells"][1] for r in page.rows]
-        assert names == ["a.jpg", NASTY, "b.jpg", "a.jpg", "c.jpg"]  # the nasty name as text
+        assert names == [NASTY, "a.jpg", "a.jpg", "b.jpg", "c.jpg"]  # the nasty name as text; by name, then path
         assert "b" not in page.tags and "i" not in page.tags  # no markup from a name
         assert len({r["id"] for r in page.rows}) == len(records)  # two a.jpg: distinct stems
         _assert_links_resolve(page, tmp_path / "fig")
-        by_name = {r["cells"][1]: r["cells"] for r in page.rows[1:]}
+        by_name = {r["cells"][1]: r["cells"] for r in page.rows[2:] + page.rows[:1]}
         assert by_name[NASTY][2:5] == ["ok", "0.900", "0.25"]
         assert by_name["b.jpg"][2] == "error" and "cannot read '<b.jpg>'" in by_name["b.jpg"][5]
-        assert page.rows[0]["cells"][3] == "0.700"  # the best axis
-        assert "died" in page.rows[3]["cells"][5]
+        assert page.rows[1]["cells"][3] == "0.700"  # the best axis
+        assert "died" in page.rows[2]["cells"][5]
         assert page.rows[4]["cells"][3] == ""  # no axis: no score
         assert "gone.png" not in path.read_text()  # a missing picture is not linked
+
+    def test_names_sort_naturally(self, tmp_path):
+        records = [{"input": f"/m/human_{i}.off", "status": "ok", "result": {"score": 0.5}, "seconds": 1.0}
+                   for i in (10, 2, 1)]
+        page = _parse(write_index(records, tmp_path / "fig"))
+        assert [r["cells"][1] for r in page.rows] == ["human_1.off", "human_2.off", "human_10.off"]
+        assert "numeric:true" in (tmp_path / "fig" / "index.html").read_text()  # and so does a click
 
     def test_static(self, tmp_path):
         html = write_index(_records(tmp_path), tmp_path / "fig").read_text()

@@ -17,10 +17,12 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from collections.abc import Mapping
-from typing import Any, Callable, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
-from torchsym.core.settings import Settings, Solver
 from torchsym.errors import ConfigError
+
+if TYPE_CHECKING:
+    from torchsym.core.settings import Settings, Solver
 
 __all__ = [
     "IMAGE_SUFFIXES", "INPUT_KINDS", "MESH_SUFFIXES", "PHOTO_SUFFIXES", "POINT_SUFFIXES", "USER_KINDS",
@@ -107,6 +109,16 @@ class Registry:
         self.what = what
         self._entries: dict[str, SolverEntry] = {}
         self._defaults: dict[str, str] = {}
+        self._loaded = False
+
+    def _load(self) -> None:
+        """Import every torchsym subpackage once, so that every solver is registered
+        before the first lookup (the package imports its members on first use)."""
+        if not self._loaded:
+            self._loaded = True
+            import torchsym
+
+            torchsym.load_all()
 
     def register(self, name: str, *, kind: str, default: bool = False) -> Callable[[T], T]:
         """Decorator registering a class under ``name`` for inputs of ``kind``."""
@@ -114,6 +126,8 @@ class Registry:
             raise ValueError(f"kind: expected one of {sorted(INPUT_KINDS)}, got {kind!r}")
 
         def deco(cls: T) -> T:
+            from torchsym.core.settings import Settings, Solver
+
             if not (isinstance(cls, type) and issubclass(cls, Solver)) or cls.settings_class is Settings:
                 raise TypeError(f"{name}: a registered solver must subclass Solver and set settings_class")
             if name in self._entries and self._entries[name].cls is not cls:
@@ -128,6 +142,7 @@ class Registry:
 
     def get(self, name: str) -> SolverEntry:
         """The entry named ``name``; :class:`ConfigError` listing the known names if none."""
+        self._load()
         try:
             return self._entries[name]
         except KeyError:
@@ -135,6 +150,7 @@ class Registry:
 
     def default_for(self, kind: str) -> SolverEntry:
         """The default solver for inputs of ``kind``."""
+        self._load()
         if kind not in self._defaults:
             known = ", ".join(f"{k} -> {v}" for k, v in sorted(self._defaults.items()))
             raise ConfigError(f"no default {self.what} for input kind {kind!r}; defaults: {known or 'none'}")
@@ -142,12 +158,15 @@ class Registry:
 
     def names(self, kind: str | None = None) -> list[str]:
         """Registered names, optionally only those taking ``kind``."""
+        self._load()
         return sorted(n for n, e in self._entries.items() if kind is None or e.kind == kind)
 
     def __contains__(self, name: object) -> bool:
+        self._load()
         return name in self._entries
 
     def __iter__(self):
+        self._load()
         return iter(self._entries.values())
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import glob
+import hashlib
 import json
 from collections import Counter
 from collections.abc import Sequence
@@ -97,7 +98,9 @@ def expand_inputs(patterns: str | Path | Sequence[str | Path], kind: str | None 
     Args:
         patterns: files, folders or glob patterns (``**`` recurses).
         kind: the pipeline's input kind; None reads every file torchsym knows (points,
-            meshes, images), one input per file.
+            meshes, images), one input per file; a folder then gives the kind most of its
+            files are, photos or 3D files, and skips the others with a note (a folder of
+            photos with its ``axes.txt``).
 
     Returns:
         :class:`Source` per input, in the order the patterns give them (a folder's and a
@@ -123,8 +126,16 @@ def expand_inputs(patterns: str | Path | Sequence[str | Path], kind: str | None 
                 entries = _listing(p)
                 files = [q for q in entries if q.is_file() and q.suffix.lower() in suffixes]
                 skipped = [q for q in entries if q.is_file() and q.suffix.lower() not in suffixes]
+                mixed: tuple[str, ...] = ()
+                if kind is None:  # a folder holds one kind: its photos, or its 3D files, the more
+                    photos = [q for q in files if q.suffix.lower() in IMAGE_SUFFIXES]
+                    shapes = [q for q in files if q.suffix.lower() not in IMAGE_SUFFIXES]
+                    if photos and shapes:
+                        files, other = (photos, shapes) if len(photos) >= len(shapes) else (shapes, photos)
+                        most = "photos" if files is photos else "3D files"
+                        mixed = _skipped(other, f"input of the folder's kind (most of its files are {most})")
                 if not grouped:
-                    notes = _skipped(skipped, what)
+                    notes = _skipped(skipped, what) + mixed
                     skipped_notes += notes
                     sources += [Source(str(q), (str(q),), notes=notes if i == 0 else ()) for i, q in enumerate(files)]
                 elif files:
@@ -186,13 +197,16 @@ def _resolved(path: str) -> str:
 def unique_stems(paths: Sequence[Path]) -> list[str]:
     """Output names for ``paths``: the file's stem (a folder's name), with its suffix
     added where two inputs share a stem (``chair.png``, ``chair.xyz`` -> ``chair_png``,
-    ``chair_xyz``) and a count where they still clash (the same name in two folders)."""
+    ``chair_xyz``) and a count where they still clash (the same name in two folders).
+    A name longer than :data:`MAX_STEM` characters keeps its start and a hash of the
+    whole (:func:`short_stem`), so that ``<stem>_<picture>.png`` fits a file system's
+    255-byte names."""
     counts = Counter(p.stem for p in paths)
     taken = {p.stem for p in paths if counts[p.stem] == 1}
     out = []
     for p in paths:
         if counts[p.stem] == 1:
-            out.append(p.stem)
+            out.append(short_stem(p.stem))
             continue
         base = f"{p.stem}_{p.suffix.lstrip('.').lower()}" if p.suffix else p.stem
         stem, k = base, 1
@@ -200,5 +214,20 @@ def unique_stems(paths: Sequence[Path]) -> list[str]:
             k += 1
             stem = f"{base}_{k}"
         taken.add(stem)
-        out.append(stem)
+        out.append(short_stem(stem))
     return out
+
+
+#: the longest output stem, in UTF-8 bytes: room for the longest picture suffix a writer
+#: adds (``_symmetry_map_axis12_nmrf.npy``...) within 255 bytes
+MAX_STEM = 120
+
+
+def short_stem(stem: str) -> str:
+    """``stem`` if it fits :data:`MAX_STEM` bytes, else its first characters, ``_`` and 10
+    hex digits of its SHA-1 (distinct long names stay distinct)."""
+    if len(stem.encode()) <= MAX_STEM:
+        return stem
+    digest = hashlib.sha1(stem.encode()).hexdigest()[:10]
+    head = stem.encode()[: MAX_STEM - 11].decode(errors="ignore")
+    return f"{head}_{digest}"

@@ -40,7 +40,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from torchsym.runner.evaluate import evaluate, format_evaluation
+    from torchsym.runner.scoring import evaluate, format_evaluation
 
     ev = evaluate(args.results, args.truth)
     print(format_evaluation(ev))
@@ -90,6 +90,6 @@ def add_parsers(sub: Any) -> None:
         ),
     )
     e.add_argument("results", help="the JSON-lines results file of torchsym run")
-    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: the docstring of torchsym.runner.evaluate)")
+    e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: the docstring of torchsym.runner.truth)")
     e.add_argument("--json", metavar="FILE", help="also write the figures, per input too, as JSON")
     e.set_defaults(func=_cmd_evaluate)

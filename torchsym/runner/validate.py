@@ -44,7 +44,8 @@ def check_run_options(
     """Raise :class:`InputValueError` for options of :func:`torchsym.run` that would hang
     or fail late (``workers=0``: a cluster with nothing to run on; ``threads_per_worker``
     of 1e9: a crash in OpenMP; both at most 4 x the machine's cores) and
-    :class:`InputFileError` for an ``out`` that is a folder or lies in a missing one."""
+    :class:`InputFileError` for an ``out`` that is a folder or lies under a file (a missing
+    folder is made)."""
     most = 4 * (os.cpu_count() or 1)  # more would only oversubscribe; 1e9 threads crashed OpenMP
     _count(workers, "workers", 1, most)
     _count(threads_per_worker, "threads_per_worker", 1, most)
@@ -59,8 +60,9 @@ def check_run_options(
     p = Path(out)
     if p.is_dir():
         raise InputFileError(f"out: expected the path of a results file, got the folder {str(p)!r}")
-    if not p.parent.is_dir():
-        raise InputFileError(f"out: the folder {str(p.parent)!r} of the results file does not exist")
+    blocked = next((q for q in p.parents if q.exists() and not q.is_dir()), None)
+    if blocked is not None:  # a missing folder is made when the run starts; a file in the way is not
+        raise InputFileError(f"out: {str(blocked)!r} in the path of the results file is a file, not a folder")
 
 
 def _numbers(value: Any, where: str, shape: tuple[int | None, ...], *, finite: bool = True) -> np.ndarray:

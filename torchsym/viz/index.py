@@ -10,16 +10,18 @@ is escaped, so a file named ``<b>x</b>.png`` shows as text.
 
 from __future__ import annotations
 
-import hashlib
 import html
 import json
 import math
 import os
+import re
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
+
+from torchsym.io.inputs import unique_stems
 
 __all__ = ["record_score", "write_index"]
 
@@ -47,7 +49,7 @@ document.querySelectorAll('th[data-col]').forEach(function(th){th.addEventListen
  var rows=Array.prototype.slice.call(body.rows);
  rows.sort(function(a,b){var x=a.cells[col].dataset.sort,y=b.cells[col].dataset.sort;
   if(x===''&&y==='')return 0;if(x==='')return 1;if(y==='')return -1;
-  var c=num?(+x)-(+y):x.localeCompare(y);return desc?-c:c;});
+  var c=num?(+x)-(+y):x.localeCompare(y,undefined,{numeric:true});return desc?-c:c;});
  rows.forEach(function(r){body.appendChild(r)});});});
 """
 
@@ -69,12 +71,9 @@ def record_score(result: Any) -> float | None:
     return None
 
 
-def _stems(inputs: Sequence[str]) -> list[str]:
-    """File-name stems of the records' JSON: the input's stem, with a hash of its path where
-    two inputs share one (the rule of the run's picture names)."""
-    names = [Path(p).stem for p in inputs]
-    counts = Counter(names)
-    return [s if counts[s] == 1 else f"{s}_{hashlib.sha1(p.encode()).hexdigest()[:8]}" for s, p in zip(names, inputs)]
+def _natural(text: str) -> list[Any]:
+    """Sort key that orders numbers in names by value (``human_2`` before ``human_10``)."""
+    return [(0, int(part), "") if part.isdigit() else (1, 0, part.lower()) for part in re.split(r"(\d+)", text) if part]
 
 
 def _href(target: Path, root: Path) -> str:
@@ -133,9 +132,10 @@ def write_index(records: Sequence[Mapping[str, Any]], figures_dir: str | Path, *
     """
     root = Path(figures_dir)
     (root / "records").mkdir(parents=True, exist_ok=True)
+    records = sorted(records, key=lambda r: (_natural(Path(str(r.get("input"))).name), _natural(str(r.get("input")))))
     inputs = [str(r.get("input")) for r in records]
     rows = []
-    for rec, stem in zip(records, _stems(inputs)):
+    for rec, stem in zip(records, unique_stems([Path(p) for p in inputs])):
         json_path = root / "records" / f"{stem}.json"
         json_path.write_text(json.dumps(rec, indent=1, default=str))
         rows.append(_row(rec, stem, root, json_path))
