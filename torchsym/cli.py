@@ -8,10 +8,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import re
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -106,6 +108,27 @@ def _error_line(source: str, error: dict[str, Any]) -> str:
     return f"{source}: internal error {error.get('type')}: {error.get('message')} (at {error.get('where')})"
 
 
+@contextlib.contextmanager
+def _ticking(bar: Any, every: float = 1.0) -> Iterator[None]:
+    """Redraw ``bar`` every ``every`` seconds while the body runs, so a long input shows
+    its name and elapsed time as it runs (a terminal only: a disabled bar draws nothing)."""
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(every):
+            bar.refresh()
+
+    thread = threading.Thread(target=tick, name="torchsym-progress", daemon=True)
+    if not bar.disable:
+        thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        if thread.is_alive():
+            thread.join()
+
+
 def detect_files(
     inputs: Sequence[str],
     out: Path,
@@ -154,9 +177,13 @@ def detect_files(
     records: list[dict[str, Any]] = []
     failures = 0
     try:
-        with tqdm(total=len(specs), unit="input", disable=True if quiet else None, file=sys.stderr, leave=False) as bar:
+        with tqdm(total=len(specs), unit="input", disable=True if quiet else None, file=sys.stderr, leave=False) as bar, \
+                _ticking(bar):
+            bar.set_description_str(specs[0].stem if specs else "")
             for spec, outcome, _ in serial_outcomes(specs, threads=2):
                 bar.clear()
+                if spec.index + 1 < len(specs):
+                    bar.set_description_str(specs[spec.index + 1].stem, refresh=False)
                 source = sources[spec.index]
                 for note in outcome.get("notes") or []:
                     print(f"torchsym: note: {source.name}: {note}", file=sys.stderr)

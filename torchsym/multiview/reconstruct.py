@@ -8,11 +8,13 @@ mean of the SIFT descriptors of its observations (Sec. 5.3.2).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import shutil
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +26,8 @@ from torchsym.errors import InputFileError, SolverError
 from torchsym.multiview.result import Cameras
 from torchsym.multiview.settings import ReconstructionSettings
 from torchsym.multiview.views import Views
+
+logger = logging.getLogger(__name__)
 
 log = logging.getLogger(__name__)
 
@@ -123,6 +127,21 @@ def point_descriptors(reconstruction: Any, database_path: Path) -> tuple[np.ndar
     return ids, out
 
 
+@contextlib.contextmanager
+def _colmap_log_level() -> Iterator[None]:
+    """COLMAP's INFO lines (about 80 a scene: each photo's features, each match, each
+    registration) held back unless torchsym logs at INFO (``-v``); warnings still show."""
+    import pycolmap
+
+    saved = pycolmap.logging.minloglevel
+    if not logger.isEnabledFor(logging.INFO):
+        pycolmap.logging.minloglevel = max(int(saved), 1)  # glog: 0 INFO, 1 WARNING
+    try:
+        yield
+    finally:
+        pycolmap.logging.minloglevel = saved
+
+
 def reconstruct(views: Views, settings: ReconstructionSettings, seed: int) -> SparseModel:
     """Sparse structure from motion of ``views`` by COLMAP (thesis Sec. 5.3.1).
 
@@ -134,7 +153,7 @@ def reconstruct(views: Views, settings: ReconstructionSettings, seed: int) -> Sp
     import pycolmap
 
     timings: dict[str, float] = {}
-    with tempfile.TemporaryDirectory(prefix="torchsym-sfm-") as tmp:
+    with _colmap_log_level(), tempfile.TemporaryDirectory(prefix="torchsym-sfm-") as tmp:
         work = Path(tmp)
         (work / "images").mkdir()
         names = _stage_photos(views, work / "images")

@@ -198,6 +198,7 @@ def dask_client(
     from torchsym.runner.worker import WorkerSetup
 
     with contextlib.ExitStack() as stack:
+        stack.enter_context(_quiet_dask_logs())
         if engine == "local":
             stack.callback(_restore_environ, dict(os.environ))
             stack.enter_context(dask.config.set(QUIET))  # while nannies start (and restart) workers
@@ -218,6 +219,20 @@ def dask_client(
             client.register_plugin(WorkerSetup(threads, imports))
             logger.info("dask engine on %s: %d workers", where, len(client.scheduler_info()["workers"]))
         yield client
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs() -> Iterator[None]:
+    """Dask's INFO lines (scheduler and nanny start-up, connections: about 30 a run) held
+    back unless torchsym itself logs at INFO (``-v``); warnings and errors still show."""
+    dask_logger = logging.getLogger("distributed")
+    saved = dask_logger.level
+    if not logger.isEnabledFor(logging.INFO):
+        dask_logger.setLevel(max(saved, logging.WARNING))
+    try:
+        yield
+    finally:
+        dask_logger.setLevel(saved)
 
 
 def _restore_environ(saved: dict[str, str]) -> None:
