@@ -38,7 +38,7 @@ class TestCLI:
 
     def test_unknown_setting(self, tmp_path, capsys):
         code = main(["detect", str(torchsym.data.sample_path("chair.ply")), "--out", str(tmp_path), "--set", "n_strats=2"])
-        assert code == 1 and "did you mean 'n_starts'" in capsys.readouterr().err
+        assert code == 2 and "did you mean 'n_starts'" in capsys.readouterr().err
 
     def test_out_that_cannot_be_created(self, tmp_path, capsys):
         blocker = tmp_path / "file.txt"

@@ -154,7 +154,7 @@ def detect_files(
     from tqdm import tqdm
 
     from torchsym.core.config import load_config
-    from torchsym.errors import InputFileError
+    from torchsym.errors import ConfigError, InputFileError
     from torchsym.io.inputs import expand_inputs
     from torchsym.runner.engine import serial_outcomes
     from torchsym.runner.task import TaskSpec
@@ -188,6 +188,8 @@ def detect_files(
                 for note in outcome.get("notes") or []:
                     print(f"torchsym: note: {source.name}: {note}", file=sys.stderr)
                 bar.update(1)
+                if outcome["status"] != "ok" and overrides and cfg is None and (outcome["error"] or {}).get("type") == "ConfigError":
+                    raise ConfigError(_error_line(source.name, outcome["error"]))  # a bad --set: exit 2, as with --config
                 if outcome["status"] != "ok":
                     failures += 1
                     _fail(_error_line(source.name, outcome["error"]))

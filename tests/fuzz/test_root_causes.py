@@ -360,3 +360,37 @@ def test_flip_loss_overflowing_outputs():
     with pytest.raises(InputValueError, match="output: expected entries below"):
         L.flip_consistency_loss(a, torch.zeros_like(a), kind="l2")
     assert torch.isfinite(L.flip_consistency_loss(a / 1e20, torch.zeros_like(a), kind="l2")).all()
+
+
+class TestFrontDoorThirdRound:
+    """Root causes of the third fuzz round at the front door (issue 59)."""
+
+    def test_figures_naming_a_file_is_a_typed_error(self, tmp_path):
+        (tmp_path / "f").write_text("x")
+        with pytest.raises(InputFileError, match="figures: .* is a file, not a folder"):
+            torchsym.run(REPO / "configs" / "pointcloud_plane.yaml", [_cloud(tmp_path)], tmp_path / "r.jsonl",
+                         figures=tmp_path / "f")
+
+    @pytest.mark.parametrize("config", [[], ["--config", "pointcloud_plane"]])
+    def test_bad_set_exits_2_with_or_without_config(self, tmp_path, config, capsys):
+        from torchsym.cli import main
+
+        code = main(["detect", str(_cloud(tmp_path)), "--out", str(tmp_path / "o"), "--set", "nosuch=1", *config])
+        assert code == 2 and "unknown setting" in capsys.readouterr().err
+
+    def test_symmslic_axes_of_the_wrong_type(self):
+        with pytest.raises(InputShapeError, match="axes"):
+            torchsym.symm_slic(torch.rand(3, 96, 96, generator=_gen()), axes="x")
+
+    def test_float_photo_in_0_255_is_refused_by_the_axis_stage(self):
+        with pytest.raises(InputValueError, match=r"intensities in \[0, 1\]"):
+            torchsym.image_axes(torch.rand(3, 64, 64, generator=_gen()) * 255)
+
+    def test_long_input_names_keep_their_results(self, tmp_path):
+        from torchsym.cli import main
+
+        long = tmp_path / ("a" * 240 + ".xyz")
+        np.savetxt(long, torchsym.data.sample_pointcloud().numpy()[:500])
+        assert main(["detect", str(long), "--out", str(tmp_path / "o"), "-q"]) == 0
+        written = sorted(p.name for p in (tmp_path / "o").iterdir())
+        assert written and all(len(n.encode()) <= 255 for n in written) and any(n.endswith(".json") for n in written)

@@ -166,7 +166,7 @@ def run(
     """
     t0 = time.perf_counter()
     check_run_options(out=out, workers=workers, threads_per_worker=threads_per_worker, retries=retries,
-                      max_in_flight=max_in_flight, connect_timeout=connect_timeout)
+                      max_in_flight=max_in_flight, connect_timeout=connect_timeout, figures=figures)
     if max_inline is not None and (isinstance(max_inline, bool) or not isinstance(max_inline, int) or max_inline < 0):
         raise InputValueError(f"max_inline: expected a count >= 0 or None, got {max_inline!r}")
     for name in imports:  # they may register the config's solvers

@@ -40,6 +40,7 @@ def check_run_options(
     retries: Any,
     max_in_flight: Any,
     connect_timeout: Any,
+    figures: Any = None,
 ) -> None:
     """Raise :class:`InputValueError` for options of :func:`torchsym.run` that would hang
     or fail late (``workers=0``: a cluster with nothing to run on; ``threads_per_worker``
@@ -60,9 +61,19 @@ def check_run_options(
     p = Path(out)
     if p.is_dir():
         raise InputFileError(f"out: expected the path of a results file, got the folder {str(p)!r}")
-    blocked = next((q for q in p.parents if q.exists() and not q.is_dir()), None)
-    if blocked is not None:  # a missing folder is made when the run starts; a file in the way is not
-        raise InputFileError(f"out: {str(blocked)!r} in the path of the results file is a file, not a folder")
+    _folder_path(p.parent, "out", "the results file")
+    if figures is not None:
+        if not isinstance(figures, (str, Path)) or not str(figures):
+            raise InputValueError(f"figures: expected the path of a folder for the pictures, got {figures!r}")
+        _folder_path(Path(figures), "figures", "the picture folder")
+
+
+def _folder_path(folder: Path, name: str, what: str) -> None:
+    """Raise :class:`InputFileError` when ``folder``, or a folder above it, is a file (a
+    missing folder is made when the run starts; a file in the way is not)."""
+    blocked = next((q for q in (folder, *folder.parents) if q.exists() and not q.is_dir()), None)
+    if blocked is not None:
+        raise InputFileError(f"{name}: {str(blocked)!r} in the path of {what} is a file, not a folder")
 
 
 def _numbers(value: Any, where: str, shape: tuple[int | None, ...], *, finite: bool = True) -> np.ndarray:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from torchsym.core.checks import check_image
+from torchsym.core.checks import check_image, check_unit_range
 from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.results import on_input_device
@@ -74,6 +74,8 @@ def image_axes(
     settings = resolve_settings(AxisStageSettings, settings, overrides)
     generator = generator if generator is not None else make_generator(settings.candidates.seed)
     img = check_image(image, "image", min_size=16)
+    if not _integer_image(image):
+        img = check_unit_range(img, "image")  # a float photo in 0-255 would saturate: refused, as elsewhere
     found = [_one(img[b : b + 1], settings, generator) for b in range(img.shape[0])]
     return found[0] if len(found) == 1 else ReflectionAxesBatch(tuple(found))
 
@@ -174,3 +176,9 @@ class AxisStage(Solver):
 
     def forward(self, data: torch.Tensor, generator: torch.Generator | None = None):
         return image_axes(data, self.settings, generator=generator)
+
+
+def _integer_image(image: object) -> bool:
+    """Whether ``image`` holds integers (scaled to [0, 1] by :func:`check_image`)."""
+    dtype = getattr(image, "dtype", None)
+    return dtype is not None and not (dtype.is_floating_point if isinstance(dtype, torch.dtype) else dtype.kind == "f")

@@ -29,7 +29,7 @@ import kornia
 import numpy as np
 import torch
 
-from torchsym.core.checks import check_image
+from torchsym.core.checks import as_tensor, check_image
 from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
@@ -181,7 +181,7 @@ def symm_slic(
                                  torch.zeros(0, dtype=torch.float64))
         normals, offsets = found.normals, found.offsets
     elif axes is not None:
-        ax = torch.as_tensor(axes, dtype=torch.float64)
+        ax = as_tensor(axes, "axes", dtype=torch.float64)
         if ax.dim() != 2 or ax.shape[1] != 3 or not bool(torch.isfinite(ax).all()) or bool((ax[:, :2].norm(dim=1) == 0).any()):
             raise InputShapeError(f"axes: expected (A, 3) finite rows (n_x, n_y, offset) with a nonzero normal, got {tuple(ax.shape)}")
         scale = ax[:, :2].norm(dim=1, keepdim=True)
