@@ -162,7 +162,7 @@ class Result:
 
 
 #: the fields :meth:`Result.summary` names when a result has them, in this order
-_SUMMARY_FIELDS = ("normal", "offset", "found", "score", "hypothesis", "n_superpixels", "converged", "iterations")
+_SUMMARY_FIELDS = ("normal", "offset", "found", "score", "n_planes", "hypothesis", "n_superpixels", "converged", "iterations")
 
 
 def _brief(v: Any) -> Any:
