@@ -27,7 +27,6 @@ Usage: python benchmarks/bench_device.py [--threads 2] [--repeats 3] [--out benc
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import statistics
 import sys
@@ -40,6 +39,7 @@ import torchsym
 from torchsym.geometry import plane_angle
 from torchsym.image.synthetic import mirrored_objects_image
 from torchsym.matching.knn import KNNIndex
+from report import write_report
 
 
 def _sync(device: torch.device) -> None:
@@ -176,12 +176,8 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['mm_s']:.4f} | {r['tree_s']:.4f} | {r['build_s']:.4f} | {r['brute_s'] / r['tree_s']:.2f} | "
             f"{r['same']:.4f} | {r['same_mm']:.4f} |"
         )
-    table = "\n".join(lines)
-    print(table)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "device.md").write_text(table + "\n")
     meta = {"device": name, "threads": args.threads, "repeats": args.repeats, "torch": torch.__version__}
-    (args.out / "device.json").write_text(json.dumps({"meta": meta, "rows": rows, "knn": knn_rows}, indent=2))
+    write_report(args.out, "device", "\n".join(lines) + "\n", {"meta": meta, "rows": rows, "knn": knn_rows})
     return 0
 
 

@@ -41,7 +41,6 @@ import json
 import math
 import os
 import statistics
-import sys
 import time
 from pathlib import Path
 
@@ -65,8 +64,7 @@ from torchsym.geometry.mesh import Mesh
 from torchsym.pointcloud.reflection_planes.distance_test import DistanceTest, distance_test
 from torchsym.pointcloud.reflection_planes.revolution import candidate_axes, rotation_transforms
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from report import write_report  # noqa: E402
+from report import write_report
 
 EXACT, NEAR = 1.3, 2.0
 VARIANTS = ("clean", "noise", "holes", "uneven")

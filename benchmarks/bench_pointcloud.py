@@ -88,6 +88,7 @@ from torchsym.metrics import evaluate_planes
 from torchsym.mesh.synthetic import mirror_complete as mirror_complete_mesh
 from torchsym.pointcloud import add_outliers, mirror_complete, perturb, remove_part, sample_surface
 from torchsym.pointcloud.synthetic import SymmetricCloud, random_rigid_motion
+from report import write_report
 
 ROOT = Path(__file__).resolve().parents[1]
 PROTOCOLS = {
@@ -404,11 +405,8 @@ def main(argv=None) -> int:
     lines += timing_lines(timing, args) + score_lines(score)
     text = "\n".join(lines) + "\n"
     print()
-    print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "pointcloud.md").write_text(text)
-    (args.out / "pointcloud.json").write_text(json.dumps({"args": {k: str(v) for k, v in vars(args).items()},
-                                                          "rows": rows, "timing": timing, "score": score}, indent=1))
+    write_report(args.out, "pointcloud", text, {"args": {k: str(v) for k, v in vars(args).items()},
+                                                "rows": rows, "timing": timing, "score": score})
     return 0
 
 

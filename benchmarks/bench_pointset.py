@@ -69,6 +69,7 @@ from torchsym.metrics.pointset import (
 from torchsym.optim import trust_region
 from torchsym.pointset import make_symmetric_pointset, point_symm
 from torchsym.pointset import transform as tf
+from report import write_report
 
 HERE = Path(__file__).resolve().parent
 log = logging.getLogger("bench_pointset")
@@ -672,12 +673,7 @@ def main() -> None:
             "met": min(ratios) >= 1.0,
         },
     ]
-    md = to_markdown(res)
-    print(md)
-    out = HERE / "results"
-    out.mkdir(exist_ok=True)
-    (out / "pointset.md").write_text(md)
-    (out / "pointset.json").write_text(json.dumps(res, indent=2))
+    write_report(HERE / "results", "pointset", to_markdown(res), res)
 
 
 if __name__ == "__main__":

@@ -446,9 +446,10 @@ def killed_driver(inputs: str, work: Path, n: int, sleep: float, kill_after: int
     out.unlink(missing_ok=True)
     log.unlink(missing_ok=True)
     cfg = {"input": "pointcloud", "steps": [{"name": "bench_noop", "params": {"sleep": sleep, "log": str(log)}}]}
-    script = ("import json, sys; sys.path.insert(0, sys.argv[4]); import torchsym\n"
+    script = ("import json, sys; import torchsym\n"
               "torchsym.run(json.loads(sys.argv[1]), sys.argv[2], sys.argv[3], engine='local', workers=2, imports=['runner_noop'])\n")
-    proc = subprocess.Popen([sys.executable, "-c", script, json.dumps(cfg), inputs, str(out), str(HERE)], cwd=REPO,
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.Popen([sys.executable, "-c", script, json.dumps(cfg), inputs, str(out)], cwd=REPO, env=env,
                             start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     while _count_lines(out) < kill_after and proc.poll() is None:
         time.sleep(0.01)

@@ -52,7 +52,6 @@ runs on every image.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import statistics
 import sys
@@ -72,6 +71,7 @@ from torchsym.metrics.masks import best_reflection_iou
 from torchsym.metrics.superpixels import segmentation_error
 from torchsym.metrics.symmetry_map import ssm_scores
 from torchsym.runner.truth import read_object_mask
+from report import write_report
 
 ROOT = Path(__file__).resolve().parents[1]
 LIST = ROOT / "benchmarks" / "data" / "symmetric_masks.txt"
@@ -344,12 +344,8 @@ def run(args) -> int:
             name = f"{label} {sets_used[0]}" if len(sets_used) == 1 else f"{label}, both sets"
             table.append((name, sm))
     probe = probe_summary(rows, diag)
-    text = markdown(table, probe, args)
-    print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "segmentation.md").write_text(text)
-    (args.out / "segmentation.json").write_text(json.dumps(
-        {"args": {k: str(v) for k, v in vars(args).items()}, "table": dict(table), "probe": probe, "rows": rows}, indent=1))
+    write_report(args.out, "segmentation", markdown(table, probe, args),
+                 {"args": {k: str(v) for k, v in vars(args).items()}, "table": dict(table), "probe": probe, "rows": rows})
     return 0
 
 

@@ -25,7 +25,6 @@ Usage: python benchmarks/bench_superpixels.py --bsds DIR [--n 50] [--k 500] [--s
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import statistics
 import sys
@@ -45,6 +44,7 @@ from torchsym.metrics.superpixels import (
     mirror_consistency,
     undersegmentation_error,
 )
+from report import write_report
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -184,12 +184,8 @@ def main(argv=None) -> int:
         for m in dict.fromkeys(r["method"] for r in mirror if r["set"] == st):
             rs = [r for r in mirror if r["set"] == st and r["method"] == m]
             lines.append(f"| {st} | {m} | {statistics.fmean(r['mirror'] for r in rs):.3f} | {statistics.median(r['seconds'] for r in rs):.2f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "superpixels.md").write_text(text)
-    (args.out / "superpixels.json").write_text(json.dumps({"args": {k: str(v) for k, v in vars(args).items()},
-                                                           "bsds": bsds, "mirror": mirror}, indent=1))
+    write_report(args.out, "superpixels", "\n".join(lines) + "\n",
+                 {"args": {k: str(v) for k, v in vars(args).items()}, "bsds": bsds, "mirror": mirror})
     return 0
 
 

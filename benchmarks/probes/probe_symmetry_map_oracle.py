@@ -18,7 +18,7 @@ On every image of ``benchmarks/data/symmetric_masks.txt``, the SSM's ROC AUC and
   (``distance``) and times the descriptor term (``exact_descriptor_x_distance``), images
   with at least one such pair.
 
-    PYTHONPATH=. python benchmarks/probes/probe_symmetry_map_oracle.py [--limit N]
+    PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmetry_map_oracle.py [--limit N]
 """
 
 from __future__ import annotations
@@ -33,7 +33,6 @@ import cv2
 import numpy as np
 import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/
 import bench_segmentation as bench  # noqa: E402
 
 from torchsym.core.settings import resolve_settings  # noqa: E402
@@ -134,7 +133,7 @@ def main() -> int:
         rows.append(probe(key, bench.image_path(st, nm, args.ritm, args.bsds), masks[key], params, settings))
         print(json.dumps(rows[-1]), flush=True)
     lines = ["# SSM on the symmetric masks: detected axis against the mask's own axis", "",
-             "`PYTHONPATH=. python benchmarks/probes/probe_symmetry_map_oracle.py` (rows: the module docstring)", "",
+             "`PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmetry_map_oracle.py` (rows: the module docstring)", "",
              "| score map | images | AUC | F (beta^2 0.09) |", "|---|---|---|---|"]
     for k in KEYS:
         vals = [r[k] for r in rows if k in r]

@@ -11,7 +11,7 @@ On every image of ``benchmarks/data/symmetric_masks.txt``, SymmSLIC
   share of the image its mask covers (with a given axis the symmetric region is every
   pixel whose mirror lies in the image, so the 4.3.1 mask is that band, not the object).
 
-    PYTHONPATH=. python benchmarks/probes/probe_symmslic_axes.py
+    PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmslic_axes.py
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ import cv2
 import numpy as np
 import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/
 import bench_segmentation as bench  # noqa: E402
 
 from torchsym.image.symmslic import symm_slic  # noqa: E402
@@ -56,7 +55,7 @@ def main() -> int:
     mean = lambda k: float(np.mean([r[k] for r in rows]))  # noqa: E731
     text = "\n".join([
         "# Probe: SymmSLIC's axes on the symmetric GrabCut and Berkeley subsets", "",
-        "`PYTHONPATH=. python benchmarks/probes/probe_symmslic_axes.py` (defaults unchanged; see its docstring).", "",
+        "`PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmslic_axes.py` (defaults unchanged; see its docstring).", "",
         "| run | images | axis found | axis agrees with the mask's | error / all px | mask share of the image |", "|---|---|---|---|---|---|",
         f"| gate off (pairs.min_support 0) | {len(rows)} | {sum(r['gate_off_found'] for r in rows)} | "
         f"{sum(r['gate_off_agree'] for r in rows)} | {mean('gate_off_error'):.3f} | |",

@@ -36,7 +36,7 @@ told the mask's own best reflection axis, and masks built from it:
 both figures are printed. Errors over all pixels (the thesis's normalisation), GrabCut's
 grey band ignored.
 
-    PYTHONPATH=. python benchmarks/probes/probe_symmslic_oracle.py [mirror|segmentation]
+    PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmslic_oracle.py [mirror|segmentation]
 """
 
 from __future__ import annotations
@@ -54,7 +54,6 @@ import torch
 import torch.nn.functional as F
 from scipy import ndimage
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/
 import bench_segmentation as seg  # noqa: E402
 import bench_superpixels as sup  # noqa: E402
 
@@ -226,7 +225,7 @@ def seg_summary(rows: list[dict]) -> list[str]:
 
 
 def header(part: str) -> str:
-    return (f"# Probe: SymmSLIC with oracle axes ({part})\n\n`PYTHONPATH=. python benchmarks/probes/probe_symmslic_oracle.py {part}` "
+    return (f"# Probe: SymmSLIC with oracle axes ({part})\n\n`PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symmslic_oracle.py {part}` "
             "(see its docstring), one thread; the machine's load is not recorded here.\n\n")
 
 

@@ -10,7 +10,7 @@ the best field's correspondence rate at 5 px over the object's symmetric pixels;
 (:func:`torchsym.metrics.superpixels.mirror_consistency`) of its superpixels about the true
 axis over those pixels. Writes ``benchmarks/results/symmetry_map_shipped.md`` and ``.json``.
 
-    PYTHONPATH=. python benchmarks/probe_symm_shipped.py [--n 8]
+    PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symm_shipped.py [--n 8]
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def main() -> None:
                      "slic_consistency": mc, "slic_notes": list(getattr(ss, "notes", []))})
         print(rows[-1], flush=True)
     lines = ["# Shipped dense map and SymmSLIC, axes from the axis stage", "",
-             f"`PYTHONPATH=. python benchmarks/probe_symm_shipped.py --n {args.n}`; one thread, load average "
+             f"`PYTHONPATH=.:benchmarks python benchmarks/probes/probe_symm_shipped.py --n {args.n}`; one thread, load average "
              f"{load0:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on 2 shared cores (times indicative).", "",
              "| seed | map s | map axes | field right at 5 px | SymmSLIC s | mirror consistency |", "|---|---|---|---|---|---|"]
     for r in rows:
