@@ -138,12 +138,14 @@ def detect_files(
     overrides: dict[str, Any] | None = None,
     figures: bool = True,
     quiet: bool = False,
+    threads: int | None = None,
 ) -> tuple[int, list[dict[str, Any]]]:
     """Run each input of ``inputs`` and write ``<stem>.json`` and its pictures into ``out``:
     the serial case of ``torchsym run``, with the same input expansion
     (:func:`torchsym.io.inputs.expand_inputs`) and the same task
     (:func:`torchsym.runner.task.run_task` on the serial engine). A failing input is
-    reported on one line and the run goes on.
+    reported on one line and the run goes on. ``threads``: torch threads (None: the
+    machine's cores, :func:`~torchsym.runner.validate.default_threads`).
 
     Returns:
         ``(failures, records)``: the number of inputs that failed and the records written.
@@ -157,9 +159,12 @@ def detect_files(
     from torchsym.errors import ConfigError, InputFileError
     from torchsym.io.inputs import expand_inputs
     from torchsym.runner.engine import serial_outcomes
+    from torchsym.runner.store import config_hash, input_key, make_record
+    from torchsym.runner.validate import check_threads, default_threads
     from torchsym.runner.task import TaskSpec
 
     overrides = dict(overrides or {})
+    threads = default_threads() if threads is None else check_threads(threads)
     cfg = load_config(config).with_overrides(overrides) if config else None
     sources = expand_inputs(list(inputs), kind or (cfg.input if cfg is not None else None))
     # never written: the inputs and the config file
@@ -169,7 +174,7 @@ def detect_files(
     except OSError as exc:
         raise InputFileError(f"--out: cannot write into '{out}' ({exc.strerror or exc})") from None
     specs = [
-        TaskSpec(i, s.name, cfg.to_dict() if cfg is not None else None, 2, str(staging) if figures else None, s.stem,
+        TaskSpec(i, s.name, cfg.to_dict() if cfg is not None else None, threads, str(staging) if figures else None, s.stem,
                  max_inline=None, files=s.files, kind=kind, overrides={} if cfg is not None else overrides, notes=s.notes)
         for i, s in enumerate(sources)
     ]
@@ -180,7 +185,7 @@ def detect_files(
         with tqdm(total=len(specs), unit="input", disable=True if quiet else None, file=sys.stderr, leave=False) as bar, \
                 _ticking(bar):
             bar.set_description_str(specs[0].stem if specs else "")
-            for spec, outcome, _ in serial_outcomes(specs, threads=2):
+            for spec, outcome, _ in serial_outcomes(specs, threads=threads):
                 bar.clear()
                 if spec.index + 1 < len(specs):
                     bar.set_description_str(specs[spec.index + 1].stem, refresh=False)
@@ -194,9 +199,8 @@ def detect_files(
                     failures += 1
                     _fail(_error_line(source.name, outcome["error"]))
                     continue
-                record = {"input": source.name, "files": list(source.files), "kind": outcome["kind"],
-                          "config": outcome["config"], "seconds": outcome["seconds"], "notes": outcome["notes"],
-                          "result": outcome["result"], "artifacts": outcome["artifacts"]}
+                key = input_key(source.name, config_hash(outcome["config"] or {}), source.files)
+                record = make_record(key, {**outcome, "files": list(source.files)})
                 try:
                     paths = _place(record, staging, out, spec.stem, protected, written)
                 except InputFileError as exc:
@@ -220,7 +224,7 @@ def _cmd_detect(args: argparse.Namespace) -> int:
 
     failures, _ = detect_files(
         args.inputs, _out_dir(args.out), config=args.config, kind=args.kind, overrides=parse_overrides(args.set or []),
-        figures=not args.no_figures, quiet=args.quiet,
+        figures=not args.no_figures, quiet=args.quiet, threads=args.threads,
     )
     return 1 if failures else 0
 
@@ -299,6 +303,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--kind", choices=USER_KINDS, help="treat inputs as this kind (e.g. pointcloud: a mesh sampled on its surface; mesh: the intrinsic pipeline)")
     d.add_argument("--no-figures", action="store_true", help="write JSON only")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    d.add_argument("--threads", type=int, default=None, help="torch threads (default: the machine's cores)")
     d.set_defaults(func=_cmd_detect)
 
     m = sub.add_parser("demo", help="run the point-cloud pipeline on the embedded sample and check the answer",

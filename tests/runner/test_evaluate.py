@@ -272,3 +272,25 @@ class TestExceptions:
         truth.write_text(json.dumps({"input": "zzz.ply", "normal": [1, 0, 0], "offset": 0}) + "\n")
         with pytest.raises(InputValueError, match=r"no record of the run has ground truth .*'a\.ply'.*zzz\.ply"):
             evaluate(results, truth)
+
+
+def test_detect_and_run_write_one_record_schema(tmp_path):
+    """``torchsym detect``'s ``<stem>.json`` is a run's record: ``evaluate`` scores the folder."""
+    import numpy as np
+
+    import torchsym
+    from torchsym.cli import main
+
+    points = torchsym.data.sample_pointcloud().numpy()
+    np.save(tmp_path / "chair.npy", points)
+    n, d = torchsym.data.sample_plane()
+    truth = tmp_path / "planes.jsonl"
+    truth.write_text(json.dumps({"input": "chair.npy", "normal": n.tolist(), "offset": float(d),
+                                 "box_min": points.min(0).tolist(), "box_max": points.max(0).tolist()}) + "\n")
+    assert main(["detect", str(tmp_path / "chair.npy"), "--out", str(tmp_path / "o"), "--no-figures", "-q"]) == 0
+    torchsym.run("pointcloud_plane", [str(tmp_path / "chair.npy")], tmp_path / "r.jsonl")
+    detect_rec = json.loads((tmp_path / "o" / "chair.json").read_text())
+    run_rec = torchsym.read_results(tmp_path / "r.jsonl")[0]
+    assert set(detect_rec) == set(run_rec)
+    assert evaluate(tmp_path / "o", truth).figures["plane"]["f"] == 1.0
+    assert type(torchsym.load_result(tmp_path / "o" / "chair.json")).__name__ == "ReflectionPlaneResult"

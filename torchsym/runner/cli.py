@@ -70,7 +70,8 @@ def add_parsers(sub: Any) -> None:
                         "(default auto: dask with --address or DASK_SCHEDULER_ADDRESS, serial for at most 4 pending inputs, else local)")
     r.add_argument("--address", help="Dask scheduler: tcp://host:8786 or a scheduler.json (default: DASK_SCHEDULER_ADDRESS)")
     r.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default: %(default)s)")
-    r.add_argument("--threads", type=int, default=1, help="torch threads per task (default: %(default)s)")
+    r.add_argument("--threads", type=int, default=None,
+                   help="torch threads per task (default: the machine's cores shared among the workers)")
     r.add_argument("--retries", type=int, default=2, help="resubmissions of an input whose worker died (default: %(default)s)")
     r.add_argument("--no-resume", action="store_true", help="start --out afresh instead of skipping what is done")
     r.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting of the last solver (repeatable)")
@@ -89,7 +90,7 @@ def add_parsers(sub: Any) -> None:
             "planes in JSON lines for point clouds, BCICP .vts/.sym.vts folders for meshes."
         ),
     )
-    e.add_argument("results", help="the JSON-lines results file of torchsym run")
+    e.add_argument("results", help="the JSON-lines results file of torchsym run, or the --out folder of torchsym detect")
     e.add_argument("--truth", required=True, help="ground-truth file or folder (formats: the docstring of torchsym.runner.truth)")
     e.add_argument("--json", metavar="FILE", help="also write the figures, per input too, as JSON")
     e.set_defaults(func=_cmd_evaluate)

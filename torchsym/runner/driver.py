@@ -24,9 +24,9 @@ from torchsym.core.results import Result
 from torchsym.errors import ConfigError, InputValueError
 from torchsym.io.inputs import Source, expand_inputs
 from torchsym.runner.engine import ENGINES, open_engine
-from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key, read_results
+from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key, make_record, read_results
 from torchsym.runner.task import TaskSpec
-from torchsym.runner.validate import check_run_options
+from torchsym.runner.validate import check_run_options, default_threads
 
 __all__ = ["RunSummary", "expand_inputs", "run"]
 
@@ -81,16 +81,8 @@ def _check_kinds(cfg: PipelineConfig, sources: Sequence[Source]) -> None:
 
 
 def _record(store: ResultsStore, key: InputKey, outcome: Mapping[str, Any], attempts: int) -> dict[str, Any]:
-    rec = key.as_dict()
-    for name in ("status", "kind", "result"):
-        rec[name] = outcome.get(name)
-    rec["arrays"] = store.write_arrays(key, outcome["arrays"]) if outcome.get("arrays") else None
-    for name in ("error", "seconds"):
-        rec[name] = outcome.get(name)
-    rec["notes"] = list(outcome.get("notes") or [])
-    rec["attempts"] = attempts
-    rec["artifacts"] = list(outcome.get("artifacts") or [])
-    return rec
+    arrays = store.write_arrays(key, outcome["arrays"]) if outcome.get("arrays") else None
+    return make_record(key, outcome, attempts=attempts, arrays=arrays)
 
 
 def _choose_engine(engine: str, n_todo: int, address: str | None) -> str:
@@ -111,7 +103,7 @@ def run(
     engine: str = "auto",
     address: str | None = None,
     workers: int = 2,
-    threads_per_worker: int = 1,
+    threads_per_worker: int | None = None,
     retries: int = 2,
     resume: bool = True,
     overrides: Mapping[str, Any] | None = None,
@@ -138,7 +130,10 @@ def run(
         address: Dask scheduler, ``tcp://host:8786`` or a ``scheduler.json`` path
             (default ``DASK_SCHEDULER_ADDRESS``).
         workers: worker processes of the local cluster (default 2).
-        threads_per_worker: torch threads per task, on every engine (default 1).
+        threads_per_worker: torch threads per task, on every engine; None (default): the
+            machine's cores shared among the tasks that run at once
+            (:func:`~torchsym.runner.validate.default_threads`: ``workers`` of them on the
+            local engine, one serially; 1 on a remote scheduler), as ``torchsym detect``.
         retries: resubmissions of a task whose worker died, before it is recorded as
             ``"crashed"`` (default 2). Errors raised by a task are never retried.
         resume: False starts ``out`` afresh.
@@ -178,16 +173,18 @@ def run(
     _check_kinds(cfg, sources)
     digest = config_hash(cfg_dict)
     keys = [input_key(s.name, digest, s.files) for s in sources]
-    threads = int(threads_per_worker)
     fig_dir = None if figures is None else str(Path(figures).resolve())
     counts: Counter[str] = Counter()
     with ResultsStore(out, resume=resume) as store:
         if store.torn_bytes:
             logger.warning("%s: cut a torn last line (%d bytes)", out, store.torn_bytes)
         todo = [i for i, k in enumerate(keys) if not store.is_done(k)]
-        specs = [TaskSpec(i, keys[i].input, cfg_dict, threads, fig_dir, sources[i].stem, tuple(imports), max_inline,
+        specs = [TaskSpec(i, keys[i].input, cfg_dict, 1, fig_dir, sources[i].stem, tuple(imports), max_inline,
                           tuple(str(Path(f).resolve()) for f in sources[i].files), notes=sources[i].notes) for i in todo]
         chosen = _choose_engine(engine, len(specs), address)
+        threads = int(threads_per_worker) if threads_per_worker is not None else \
+            1 if chosen == "dask" else default_threads(workers if chosen == "local" else 1)
+        specs = [dataclasses.replace(spec, threads=threads) for spec in specs]
         skipped = len(sources) - len(specs)
         with _progress(len(sources), skipped, progress) as bar, open_engine(
             chosen, specs, address=address, workers=workers, threads=threads, imports=imports,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -279,7 +280,8 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
     """Score a run's records against ground truth.
 
     Args:
-        results: a results file (its latest record per input) or the records themselves.
+        results: a results file of ``torchsym run`` (its latest record per input), a
+            folder of ``torchsym detect``'s ``<stem>.json`` records, or the records.
         truth: a ground-truth file or folder (formats in the module docstring), or a
             :class:`GroundTruth`.
 
@@ -290,7 +292,10 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
         InputFileError: unreadable results or ground truth.
         InputValueError: no record has ground truth (names do not match).
     """
-    records = read_results(results) if isinstance(results, (str, Path)) else list(results)
+    if isinstance(results, (str, Path)) and Path(results).is_dir():
+        records = _detect_records(Path(results))
+    else:
+        records = read_results(results) if isinstance(results, (str, Path)) else list(results)
     gt = truth if isinstance(truth, GroundTruth) else read_truth(truth)
     records = [check_record(rec, f"results[{i}]", gt.kind) for i, rec in enumerate(records)]
     pairs = [(rec, gt.find(str(rec.get("input")))) for rec in records]
@@ -305,6 +310,22 @@ def evaluate(results: str | Path | Sequence[Mapping[str, Any]], truth: str | Pat
     items = [{"input": rec.get("input"), "status": rec.get("status"), **row} for (rec, _), row in zip(scored, rows)]
     n_failed = sum(1 for rec, _ in scored if not _ok(rec))
     return Evaluation(gt.kind, len(records), len(scored), n_failed, len(records) - len(scored), summary, items, gt.source)
+
+
+def _detect_records(folder: Path) -> list[dict[str, Any]]:
+    """The records ``torchsym detect`` wrote into ``folder`` (``<stem>.json``; other JSON
+    files, which hold no record, are left out)."""
+    records = []
+    for path in sorted(folder.glob("*.json")):
+        try:
+            rec = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise InputFileError(f"results: cannot read {str(path)!r} as JSON ({exc})") from None
+        if isinstance(rec, dict) and "input" in rec and "status" in rec:
+            records.append(rec)
+    if not records:
+        raise InputFileError(f"results: no torchsym detect record (<stem>.json) in the folder {str(folder)!r}")
+    return records
 
 
 def format_evaluation(ev: Evaluation) -> str:

@@ -5,9 +5,12 @@ one, so a driver killed at any moment leaves every finished record on disk and a
 torn last line, which reopening cuts. A record::
 
     {"input": "/data/chair.ply", "size": 81234, "mtime_ns": 1733212345000000000,
-     "config_hash": "3f2a...", "status": "ok", "kind": "pointcloud",
-     "result": {...}, "arrays": "chair-5d41402abc4b.npz", "error": null,
-     "seconds": 0.41, "attempts": 1, "artifacts": []}
+     "config_hash": "3f2a...", "status": "ok", "kind": "pointcloud", "files": [...],
+     "config": {...}, "result": {...}, "arrays": "chair-5d41402abc4b.npz", "error": null,
+     "seconds": 0.41, "notes": [], "attempts": 1, "artifacts": []}
+
+``torchsym detect`` writes the same record (:func:`make_record`) as ``<stem>.json``, so
+``torchsym evaluate`` and :func:`torchsym.load_result` read both.
 
 ``status`` is ``"ok"`` (``result`` holds the solver's ``to_dict()``), ``"error"`` (a
 :class:`~torchsym.errors.TorchsymError` or another exception raised by the task: final,
@@ -45,7 +48,9 @@ import numpy as np
 from torchsym.core.results import restore_arrays, to_jsonable
 from torchsym.errors import InputFileError
 
-__all__ = ["FINAL_STATUSES", "InputKey", "ResultsStore", "arrays_dir", "config_hash", "input_key", "read_results"]
+__all__ = [
+    "FINAL_STATUSES", "InputKey", "ResultsStore", "arrays_dir", "config_hash", "input_key", "make_record", "read_results",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -85,6 +90,23 @@ def input_key(path: str | Path, config_digest: str, files: Sequence[str | Path] 
             raise InputFileError(f"inputs: cannot read {str(f)!r} ({exc.strerror or exc})") from None
         size, mtime = size + int(st.st_size), max(mtime, int(st.st_mtime_ns))
     return InputKey(str(p), size, mtime, config_digest)
+
+
+def make_record(key: InputKey, outcome: Mapping[str, Any], *, attempts: int = 1, arrays: str | None = None) -> dict[str, Any]:
+    """The record of one input, for ``torchsym run``'s results file and ``torchsym detect``'s
+    ``<stem>.json`` alike: ``key``'s fields, then the task's ``outcome``
+    (:func:`~torchsym.runner.task.run_task`): status, kind, files, config, result, the
+    ``.npz`` of its large ``arrays``, error, seconds, notes, ``attempts`` and artifacts."""
+    rec = key.as_dict()
+    for name in ("status", "kind", "files", "config", "result"):
+        rec[name] = outcome.get(name)
+    rec["arrays"] = arrays
+    for name in ("error", "seconds"):
+        rec[name] = outcome.get(name)
+    rec["notes"] = list(outcome.get("notes") or [])
+    rec["attempts"] = attempts
+    rec["artifacts"] = list(outcome.get("artifacts") or [])
+    return rec
 
 
 def _parse_lines(path: Path, keep: Callable[[dict[str, Any]], dict[str, Any]] | None = None) -> tuple[list[dict[str, Any]], int]:

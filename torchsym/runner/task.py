@@ -89,7 +89,7 @@ def run_task(spec: TaskSpec) -> dict[str, Any]:
         cv2.setNumThreads(spec.threads)
     out: dict[str, Any] = {
         "status": "error", "kind": None, "result": None, "arrays": {}, "error": None, "seconds": 0.0, "artifacts": [],
-        "notes": [], "config": None, "summary": None,
+        "notes": [], "config": None, "summary": None, "files": list(spec.files or ()),
     }
     stages = out["stages"] = {}
     t0 = time.perf_counter()

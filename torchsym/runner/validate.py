@@ -32,6 +32,19 @@ def _count(value: Any, name: str, minimum: int, maximum: int | None = None) -> i
     return int(value)
 
 
+def default_threads(concurrent: int = 1) -> int:
+    """Torch threads per task when the user sets none: this machine's cores shared among
+    the ``concurrent`` tasks that run at once (at least 1). ``torchsym detect`` runs one
+    task at a time; ``torchsym run`` runs one per local worker."""
+    return max(1, (os.cpu_count() or 1) // max(1, int(concurrent)))
+
+
+def check_threads(threads: Any, name: str = "threads") -> int:
+    """``threads`` if it is a count from 1 to 4 x this machine's cores (more would only
+    oversubscribe; 1e9 threads crashed OpenMP); :class:`InputValueError` otherwise."""
+    return _count(threads, name, 1, 4 * (os.cpu_count() or 1))
+
+
 def check_run_options(
     *,
     out: str | Path,
@@ -49,7 +62,8 @@ def check_run_options(
     folder is made)."""
     most = 4 * (os.cpu_count() or 1)  # more would only oversubscribe; 1e9 threads crashed OpenMP
     _count(workers, "workers", 1, most)
-    _count(threads_per_worker, "threads_per_worker", 1, most)
+    if threads_per_worker is not None:
+        check_threads(threads_per_worker, "threads_per_worker")
     _count(retries, "retries", 0)
     if max_in_flight is not None:
         _count(max_in_flight, "max_in_flight", 1)
