@@ -13,7 +13,7 @@ from torchsym.core.checks import check_image
 from torchsym.image.symmslic.result import SymmSlicResult
 from torchsym.metrics.superpixels import boundary_map
 from torchsym.viz import artifact_writer
-from torchsym.viz.annotate import banner
+from torchsym.viz.annotate import banner, titled
 
 __all__ = ["draw_superpixels", "write_symmslic_artifacts"]
 
@@ -58,11 +58,19 @@ def draw_superpixels(result: SymmSlicResult, image: Any) -> np.ndarray:
 
 @artifact_writer(SymmSlicResult)
 def write_symmslic_artifacts(result: SymmSlicResult, data: Any, out_dir: Path, stem: str) -> list[Path]:
-    """``<stem>_superpixels.png`` (borders, pairs in one colour, axes), ``<stem>_labels.png``
+    """``<stem>_superpixels.png`` (borders, pairs in one colour, axes, under a title and a
+    legend), ``<stem>_labels.png``
     (16-bit labels), ``<stem>_labels.npy`` and ``<stem>_mask.png`` (the symmetric object)."""
     out_dir = Path(out_dir)
     paths = [out_dir / f"{stem}_superpixels.png", out_dir / f"{stem}_labels.png", out_dir / f"{stem}_labels.npy", out_dir / f"{stem}_mask.png"]
-    cv2.imwrite(str(paths[0]), draw_superpixels(result, data))
+    picture = titled(
+        draw_superpixels(result, data),
+        f"{stem}: SymmSLIC, {result.n_superpixels} superpixels, {len(result.pairs)} mirror pairs, "
+        f"covering {result.score:.0%} of the image",
+        "A mirror pair of superpixels shares a tint (white borders); unpaired superpixels are faded grey; "
+        "red: the symmetry axis.",
+    )
+    cv2.imwrite(str(paths[0]), picture)
     cv2.imwrite(str(paths[1]), result.labels.numpy().astype(np.uint16))
     np.save(paths[2], result.labels.numpy())
     cv2.imwrite(str(paths[3]), result.mask.numpy().astype(np.uint8) * 255)

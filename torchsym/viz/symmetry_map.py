@@ -11,7 +11,7 @@ import torch
 from torchsym.image.symmetry_map.result import StylizedResult, SymmetryMapResult
 from torchsym.metrics.symmetry_map import reconstruct_mirror
 from torchsym.viz import artifact_writer
-from torchsym.viz.annotate import banner
+from torchsym.viz.annotate import banner, titled
 
 __all__ = ["nmrf_hsv", "write_stylized", "write_symmetry_map"]
 
@@ -80,13 +80,15 @@ def write_symmetry_map(result: SymmetryMapResult, data: Any, out_dir: Path, stem
     """Per axis ``h``: ``{stem}_nmrf{h}.png`` (HSV picture), ``{stem}_ssm{h}.png`` (grey),
     ``{stem}_im{h}.png`` (``Im = S I(f)``) and ``{stem}_nmrf{h}.npy`` (``(H, W, 2)`` float32
     ``x, y``); ``{stem}_pairs.png`` (each axis with up to 40 of its
-    cluster's pairs in its colour). With no axis: ``{stem}_pairs.png`` says so and
+    cluster's pairs in its colour). The pictures carry a title and a legend above them. With no axis: ``{stem}_pairs.png`` says so and
     ``{stem}_ssm.png`` is all black."""
     import cv2
 
     out = Path(out_dir)
     paths = [out / f"{stem}_pairs.png"]
-    cv2.imwrite(str(paths[0]), _pairs_picture(result))
+    cv2.imwrite(str(paths[0]), titled(
+        _pairs_picture(result), f"{stem}: dense symmetry map, {len(result)} axes, mean score {result.score:.2f}",
+        "Each axis in its colour with a sample of the mirror pairs that found it (a dot at each end)."))
     if len(result) == 0:
         p = out / f"{stem}_ssm.png"
         cv2.imwrite(str(p), np.zeros(tuple(result.image.shape[-2:]), np.uint8))
@@ -94,8 +96,12 @@ def write_symmetry_map(result: SymmetryMapResult, data: Any, out_dir: Path, stem
     for h in range(len(result)):
         nmrf, ssm = result.nmrf[h], result.ssm[h]
         p_hsv, p_ssm, p_im, p_npy = (out / f"{stem}_{k}{h}.{e}" for k, e in (("nmrf", "png"), ("ssm", "png"), ("im", "png"), ("nmrf", "npy")))
-        cv2.imwrite(str(p_hsv), nmrf_hsv(nmrf, ssm))
-        cv2.imwrite(str(p_ssm), (ssm.detach().cpu().clamp(0, 1) * 255).round().byte().numpy())
+        cv2.imwrite(str(p_hsv), titled(
+            nmrf_hsv(nmrf, ssm), f"{stem}: mirror of every pixel about axis {h + 1}",
+            "Hue: the direction to the mirror pixel; saturation: its distance; brightness: the symmetry score."))
+        cv2.imwrite(str(p_ssm), titled(
+            (ssm.detach().cpu().clamp(0, 1) * 255).round().byte().numpy(), f"{stem}: symmetry score, axis {h + 1}",
+            "White: the pixel and its mirror look alike (score 1); black: they do not (0)."))
         cv2.imwrite(str(p_im), _bgr(reconstruct_mirror(result.image, nmrf, ssm)))
         np.save(p_npy, nmrf.detach().cpu().numpy().astype(np.float32))
         paths += [p_hsv, p_ssm, p_im, p_npy]
