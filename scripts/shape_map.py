@@ -59,8 +59,9 @@ def sizes() -> str:
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 span = node.end_lineno - node.lineno + 1
                 longest = max(longest, (f"{rel}: {node.name}", span), key=lambda t: t[1])
-    return (f"{len(files)} modules, {total:,} lines (docstrings included); longest function "
-            f"`{longest[0]}`, {longest[1]} lines; largest module `{largest[0]}`, {largest[1]} lines.")
+    return (f"{len(files)} modules, about {round(total, -3):,} lines (docstrings included); longest function "
+            f"`{longest[0]}`, about {round(longest[1], -1)} lines; largest module `{largest[0]}`, about "
+            f"{round(largest[1], -2)} lines.")
 
 
 def generated() -> str:

@@ -156,7 +156,7 @@ class TestSurfaceSampling:
         assert new.surface.points == 100 and new.steps[0].params["n_starts"] == 2 and cfg.surface.points == 20000
 
     @pytest.mark.parametrize("surface, message", [
-        ({"points": 0}, r"surface.points: expected an integer in \[4, 20000000\], got 0"),
+        ({"points": 0}, r"surface.points: expected an integer in \[4, 2000000\], got 0"),
         ({"points": True}, "surface.points: expected an integer"),
         ({"pionts": 5}, "unknown key 'pionts' \\(did you mean 'points'\\?\\); valid keys: points, seed"),
         ([1], "'surface' must be a mapping"),

@@ -131,3 +131,43 @@ class TestResolveAndSolver:
         assert m.settings == Toy(n_samples=3)
         assert "n_samples=3" in repr(m)
         assert ToySolver(Toy(n_samples=3), seed=2).settings.seed == 2
+
+
+def _settings_classes():
+    import torchsym
+    from torchsym.core.settings import Settings
+
+    torchsym.load_all()
+    seen, todo = [], [Settings]
+    while todo:
+        for sub in todo.pop().__subclasses__():
+            if sub not in seen:
+                seen.append(sub)
+                todo.append(sub)
+    return seen
+
+
+def test_every_number_setting_has_an_upper_bound():
+    """A bound a real use never meets and a machine can afford: explicit, or the default's
+    ceiling (:func:`torchsym.core.settings.default_ceiling`); a seed's is MAX_SEED."""
+    import typing
+
+    missing = []
+    for cls in _settings_classes():
+        if not cls.__module__.startswith("torchsym."):
+            continue  # settings defined by tests
+        hints = typing.get_type_hints(cls)
+        for f in dataclasses.fields(cls):
+            args = typing.get_args(hints[f.name]) or (hints[f.name],)
+            if (int in args or float in args) and bool not in args and f.metadata.get("high") is None:
+                missing.append(f"{cls.__qualname__}.{f.name}")
+    assert not missing, f"number settings without an upper bound: {missing}"
+
+
+def test_default_ceiling():
+    from torchsym.core.settings import MAX_SEED, default_ceiling
+
+    assert default_ceiling(10, "points") == 1000 and default_ceiling(0.005, "tolerance") == 1.0
+    assert default_ceiling(0, "a flag") is None and default_ceiling(None, "x") is None
+    assert default_ceiling(0, "seed of the generator") == MAX_SEED
+    assert default_ceiling((3, 50), "sizes") == 10000

@@ -196,8 +196,9 @@ class SurfaceSampling:
             raise ConfigError(f"{where}: {exc}") from None
 
 
-#: most points :class:`SurfaceSampling` draws (as many as the readers accept from a file)
-MAX_SURFACE_POINTS = 20_000_000
+#: most points :class:`SurfaceSampling` draws: 100x the default, the rule of every setting
+#: (:func:`torchsym.core.settings.default_ceiling`); the point pipelines subsample far below it
+MAX_SURFACE_POINTS = 2_000_000
 
 
 @dataclasses.dataclass(frozen=True)

@@ -65,10 +65,36 @@ def setting(
         unit: ``"deg"``, ``"px"``, ``"s"``, ``"input units"``, ``"x spacing"``... or empty
             for counts, flags and fractions.
         low, high: inclusive bounds (exclusive with ``low_open`` / ``high_open``) for
-            numbers; for a tuple, each element.
+            numbers; for a tuple, each element. Without ``high``, a positive number's
+            bound is :func:`default_ceiling` of its default (a seed's, the largest a
+            ``torch.Generator`` takes): every setting has a bound that a real use never
+            meets and a machine can afford, so a mistyped 1e9 is an error, not gigabytes.
     """
-    meta = {"doc": doc, "unit": unit, "low": low, "high": high, "low_open": low_open, "high_open": high_open}
+    derived = high is None
+    if derived:
+        high = default_ceiling(default, doc)
+    meta = {"doc": doc, "unit": unit, "low": low, "high": high, "low_open": low_open, "high_open": high_open,
+            "derived_high": derived and high is not None}
     return dataclasses.field(default=default, metadata=meta)
+
+
+#: the largest seed: ``torch.Generator.manual_seed`` takes up to 2**64 - 1
+MAX_SEED = 2**64 - 1
+
+
+def default_ceiling(default: Any, doc: str = "") -> float | None:
+    """The upper bound of a setting declared without one: :data:`MAX_SEED` for a seed;
+    for a positive number, 100x its default rounded up to a power of ten (a count of 10:
+    1,000; a tolerance of 0.005: 1); None for other defaults (0, None, strings, flags),
+    which declare their ``high``. Tuples: their largest element's."""
+    if "seed" in doc.lower().split(" ")[:4] or doc.lower().startswith("seed"):
+        return MAX_SEED
+    values = default if isinstance(default, tuple) else (default,)
+    numbers = [abs(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool) and v]
+    if not numbers or len(numbers) != len(values):
+        return None
+    ceiling = 10.0 ** math.ceil(math.log10(100 * max(numbers)))
+    return int(ceiling) if all(isinstance(v, int) for v in values) else ceiling
 
 
 def group(cls: type[S], doc: str = "") -> Any:
@@ -159,7 +185,7 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
     if hint is int:
         if isinstance(value, int) and not isinstance(value, bool) and _in_range(value, meta):
             return int(value)
-        raise ConfigError(f"{path}: expected an int{_with_range(meta)}, got {value!r}")
+        raise ConfigError(f"{path}: expected an int{_with_range(meta, value)}, got {value!r}")
     if hint is float:
         if isinstance(value, (int, float)) and not isinstance(value, bool) and _in_range(float(value), meta):
             return float(value)
@@ -169,7 +195,7 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
                     f"{path}: expected 0 or a magnitude in [{FLOAT_MAGNITUDE[0]:g}, {FLOAT_MAGNITUDE[1]:g}] "
                     f"(its square a normal float32 number), got {value!r}"
                 )
-        raise ConfigError(f"{path}: expected a finite number{_with_range(meta)}, got {value!r}")
+        raise ConfigError(f"{path}: expected a finite number{_with_range(meta, value)}, got {value!r}")
     if hint is str:
         if isinstance(value, str):
             return value
@@ -183,7 +209,11 @@ def _coerce(value: Any, hint: Any, meta: Mapping[str, Any], path: str) -> Any:
     return value
 
 
-def _with_range(meta: Mapping[str, Any]) -> str:
+def _with_range(meta: Mapping[str, Any], value: Any = None) -> str:
+    """The range in an error message; a derived upper bound (:func:`default_ceiling`) only
+    when ``value`` passed it, so a value below the low bound reads as before."""
+    if meta.get("derived_high") and not (isinstance(value, (int, float)) and value > meta["high"]):
+        meta = {**meta, "high": None}
     text = _range_text(meta)
     return f" {text}" if text else ""
 

@@ -31,7 +31,7 @@ class Refine(Settings):
 
     angle_step: float = setting(2.0, "first round's angle step", unit="deg", low=0.0, low_open=True)
     offset_step: float = setting(0.02, "first round's offset step", unit="x longer side", low=0.0, low_open=True)
-    rounds: int = setting(0, "rounds, each halving both steps (0: no refinement; it did not help on the butterflies: docs/design/axes.md)", low=0)
+    rounds: int = setting(0, "rounds, each halving both steps (0: no refinement; it did not help on the butterflies: docs/design/axes.md)", low=0, high=8)
     steps: int = setting(2, "steps each way per round", low=1)
     passes: int = setting(1, "refinement then extent, this many times", low=1)
     extent_threshold: float | None = setting(

@@ -86,7 +86,7 @@ class BoundaryCliquesSettings(Settings):
     max_side: int | None = setting(640, "longest side an image is detected at (a scaled copy beyond); null: full size",
                                    unit="px", low=SIFT_MIN_SIDE)
     min_side: int | None = setting(None, "longest side below which an image is detected on a scaled-up copy; null: "
-                                   "native size", unit="px", low=SIFT_MIN_SIDE)
+                                   "native size", unit="px", low=SIFT_MIN_SIDE, high=8192)
     seed: int = setting(0, "seed of the random subset of boundary pairs", low=0)
 
     def check(self) -> None:

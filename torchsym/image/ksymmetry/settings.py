@@ -17,7 +17,7 @@ class MirrorPairs(Settings):
     """Mirror symmetric pixel pairs from SIFT and mirrored SIFT (Sec. 2.2.1)."""
 
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
-    k1: int | None = setting(None, "neighbours of the mutual nearest-neighbour rule (Def. 2.2.1); null: at the elbow", low=1)
+    k1: int | None = setting(None, "neighbours of the mutual nearest-neighbour rule (Def. 2.2.1); null: at the elbow", low=1, high=1000)
     min_distance: float = setting(5.0, "keypoints closer than this are not paired", unit="px", low=0.0)
     backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
@@ -52,7 +52,7 @@ class KSymmetrySettings(Settings):
     max_side: int | None = setting(640, "longest side an image is detected at (a scaled copy beyond); null: full size",
                                    unit="px", low=SIFT_MIN_SIDE)
     min_side: int | None = setting(None, "longest side below which an image is detected on a scaled-up copy; null: "
-                                   "native size", unit="px", low=SIFT_MIN_SIDE)
+                                   "native size", unit="px", low=SIFT_MIN_SIDE, high=8192)
 
     def check(self) -> None:
         check_sides(self.min_side, self.max_side)

@@ -64,7 +64,7 @@ class PatchMatchSettings(Settings):
     neighbours: bool = setting(False, "also propagate from the 4 grid neighbours (PatchMatch's own step; not in Algorithm 3)")
     n_samples: int = setting(15, "random-search samples per pixel and iteration (the thesis's e)", low=0)
     search_radius: float | None = setting(
-        None, "random-search radius r; None: the spread of a pixel's reflections through the cluster's pairs", unit="px", low=1.0
+        None, "random-search radius r; None: the spread of a pixel's reflections through the cluster's pairs", unit="px", low=1.0, high=1e5
     )
     min_gain: float = setting(0.2, "a random-search sample must lower the cost |d_p - m_q|^2 by more than this (thesis: 0)", low=0.0)
     max_bmp_pairs: int = setting(64, "the most cluster pairs whose reflections BMP and MMP use", low=1)
@@ -84,7 +84,7 @@ class ScoreSettings(Settings):
 class SymmetryMapSettings(Settings):
     """Settings of :func:`~torchsym.image.symmetry_map.symmetry_map` (thesis Ch. 3, Algorithm 3)."""
 
-    n_axes: int | None = setting(None, "symmetry maps (the thesis's k), RansaCov clusters; None: one per axis the axis stage accepts", low=1)
+    n_axes: int | None = setting(None, "symmetry maps (the thesis's k), RansaCov clusters; None: one per axis the axis stage accepts", low=1, high=64)
     max_side: int | None = setting(640, "the image is resized so that its longer side is at most this; None: never", unit="px", low=32)
     candidates: CandidateSettings = group(CandidateSettings)
     clustering: ClusteringSettings = group(ClusteringSettings)

@@ -51,7 +51,7 @@ class Signs(Settings):
     """Signs of the eigenfunctions (step 5 and the sign hypotheses of step 7, Sec. 6.2.5)."""
 
     cross_pairs: bool = setting(True, "also read signs from geodesics between two pairs")
-    min_confidence: float = setting(0.0, "eigenfunctions with weaker sign evidence are left out of C (0: thesis)", low=0.0)
+    min_confidence: float = setting(0.0, "eigenfunctions with weaker sign evidence are left out of C (0: thesis)", low=0.0, high=1.0)
     n_uncertain: int = setting(3, "least-confident eigenfunctions whose both signs are tried (0: thesis)", low=0)
 
 

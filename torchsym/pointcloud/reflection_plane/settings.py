@@ -59,7 +59,8 @@ class StartsSettings(Settings):
 class RefineSettings(Settings):
     """The subsample on which every start is refined, and the Algorithm 6 fallback there."""
 
-    n_samples: int = setting(3000, "points of the subsample (clouds this small are used whole)", low=4)
+    n_samples: int = setting(3000, "points of the subsample (clouds this small are used whole; the readers' "
+                             "20,000,000: every point, as the thesis)", low=4, high=20_000_000)
     fallback_max_iters: int = setting(10, "Algorithm 6 steps per start when no start was accepted", low=1)
     fallback_patience: int = setting(5, "fallback starts in a row without a gain in support before stopping", low=1)
 
@@ -149,7 +150,7 @@ class ReflectionPlaneSettings(Settings):
         0.0,
         "iterative stages (alternation, pre-alignment, kernel) also converge once a step moves the plane less than "
         "this many standard errors of their fit (0, the default: their absolute tolerances alone)",
-        unit="x standard error", low=0.0,
+        unit="x standard error", low=0.0, high=100.0,
     )
     n_chance_planes: int = setting(
         64, "random planes whose highest mirror share is the score's chance level (0: the raw share)", low=0
