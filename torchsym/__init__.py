@@ -29,7 +29,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(('PointSymm', 'PointSymmResult', 'PointSymmSettings', 'make_symmetric_pointset', 'point_symm'), 'torchsym.pointset'),
     **dict.fromkeys(('evaluate',), 'torchsym.runner.scoring'),
     **dict.fromkeys(('read_results',), 'torchsym.runner.store'),
-    **dict.fromkeys(('run',), 'torchsym.runner.driver'),
+    **dict.fromkeys(('run', 'EngineOptions'), 'torchsym.runner.driver'),
     **dict.fromkeys(('detect',), 'torchsym.api'),
     **dict.fromkeys(('Pipeline', 'PipelineConfig', 'build_pipeline', 'load_config'), 'torchsym.core.config'),
     **dict.fromkeys(('SOLVERS', 'register_solver'), 'torchsym.core.registry'),
@@ -64,7 +64,7 @@ __all__ = [
     # errors
     "TorchsymError", "ConfigError", "InputFileError", "InputShapeError", "InputValueError", "SolverError",
     # dataset runner
-    "run", "evaluate", "read_results",
+    "run", "EngineOptions", "evaluate", "read_results",
     # subpackages
     "core", "data", "features", "geometry", "image", "io", "losses", "manifolds", "matching", "mesh",
     "metrics", "multiview", "optim", "pointcloud", "pointset", "runner", "viz",
@@ -164,4 +164,4 @@ if TYPE_CHECKING:  # the same names, eagerly, for type checkers and editors
         planted_symmetric_cloud,
     )
     from torchsym.pointset import PointSymm, PointSymmResult, PointSymmSettings, make_symmetric_pointset, point_symm
-    from torchsym.runner import evaluate, read_results, run
+    from torchsym.runner import EngineOptions, evaluate, read_results, run

@@ -85,5 +85,5 @@ class TestKSymmetryAxes:
     def test_exception(self):
         with pytest.raises(ConfigError, match="eps_theta: expected a finite number > 0.0"):
             KSymmetryDetector(eps_theta=0.0)
-        with pytest.raises(ConfigError, match="pairs.k1: expected an int >= 1 or null, got 0"):
+        with pytest.raises(ConfigError, match="pairs.k1: expected an int >= 1 and <= 1000 or null, got 0"):
             ksymmetry_axes(torch.rand(1, 32, 32), pairs={"k1": 0})

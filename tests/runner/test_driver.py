@@ -3,6 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import PROBE, probe_config, write_cloud
 
@@ -186,3 +187,20 @@ class TestChooseEngine:
         monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://127.0.0.1:8786")
         assert _choose_engine("auto", 1, None) == "dask"
         assert _choose_engine("serial", 100, None) == "serial"
+
+
+class TestEngineOptions:
+    def test_options_object_and_keywords_agree(self, tmp_path):
+        from torchsym.runner import EngineOptions
+
+        cloud = tmp_path / "c.npy"
+        np.save(cloud, torchsym.data.sample_pointcloud().numpy()[:400])
+        a = torchsym.run("pointcloud_plane", [str(cloud)], tmp_path / "a.jsonl", options=EngineOptions(engine="serial"))
+        b = torchsym.run("pointcloud_plane", [str(cloud)], tmp_path / "b.jsonl", engine="serial")
+        assert a.engine == b.engine == "serial"
+        ra, rb = torchsym.read_results(tmp_path / "a.jsonl")[0], torchsym.read_results(tmp_path / "b.jsonl")[0]
+        assert ra["result"]["normal"] == rb["result"]["normal"]
+
+    def test_unknown_option_is_named(self, tmp_path):
+        with pytest.raises(torchsym.InputValueError, match="wrokers: not an option of torchsym.run"):
+            torchsym.run("pointcloud_plane", ["x.npy"], tmp_path / "a.jsonl", wrokers=2)

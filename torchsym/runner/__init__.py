@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from torchsym._lazy import lazy_members
 
 _EXPORTS: dict[str, str] = {
-    **dict.fromkeys(("RunSummary", "expand_inputs", "run"), "torchsym.runner.driver"),
+    **dict.fromkeys(("EngineOptions", "RunSummary", "expand_inputs", "run"), "torchsym.runner.driver"),
     "EngineError": "torchsym.runner.engine",
     **dict.fromkeys(("Evaluation", "evaluate", "format_evaluation"), "torchsym.runner.scoring"),
     **dict.fromkeys(("GroundTruth", "read_truth"), "torchsym.runner.truth"),
@@ -26,6 +26,7 @@ _EXPORTS: dict[str, str] = {
 
 __all__ = [
     "EngineError",
+    "EngineOptions",
     "Evaluation",
     "GroundTruth",
     "ResultsStore",
@@ -41,7 +42,7 @@ __all__ = [
 __getattr__, __dir__ = lazy_members(__name__, _EXPORTS, globals())
 
 if TYPE_CHECKING:
-    from torchsym.runner.driver import RunSummary, expand_inputs, run
+    from torchsym.runner.driver import EngineOptions, RunSummary, expand_inputs, run
     from torchsym.runner.engine import EngineError
     from torchsym.runner.scoring import Evaluation, evaluate, format_evaluation
     from torchsym.runner.truth import GroundTruth, read_truth

@@ -23,11 +23,12 @@ __all__ = ["add_parsers"]
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from torchsym.core.config import parse_overrides
-    from torchsym.runner.driver import run
+    from torchsym.runner.driver import EngineOptions, run
 
+    options = EngineOptions(engine=args.engine, address=args.address, workers=args.workers,
+                            threads_per_worker=args.threads, retries=args.retries)
     summary = run(
-        args.config, args.inputs, args.out, engine=args.engine, address=args.address, workers=args.workers,
-        threads_per_worker=args.threads, retries=args.retries, resume=not args.no_resume,
+        args.config, args.inputs, args.out, options=options, resume=not args.no_resume,
         overrides=parse_overrides(args.set or []), figures=args.figures, progress=not args.quiet,
         max_inline=None if args.max_inline < 0 else args.max_inline,
     )

@@ -28,7 +28,7 @@ from torchsym.runner.store import InputKey, ResultsStore, config_hash, input_key
 from torchsym.runner.task import TaskSpec
 from torchsym.runner.validate import check_run_options, default_threads
 
-__all__ = ["RunSummary", "expand_inputs", "run"]
+__all__ = ["EngineOptions", "RunSummary", "expand_inputs", "run"]
 
 logger = logging.getLogger(__name__)
 
@@ -95,24 +95,67 @@ def _choose_engine(engine: str, n_todo: int, address: str | None) -> str:
     return "serial" if n_todo <= SERIAL_MAX else "local"
 
 
+@dataclasses.dataclass(frozen=True)
+class EngineOptions:
+    """Where and how :func:`run` runs its tasks (as Open3D groups its criteria).
+
+    Attributes:
+        engine: ``"serial"``, ``"local"`` (a Dask ``LocalCluster``), ``"dask"`` (the
+            scheduler at ``address``) or ``"auto"``: ``"dask"`` when ``address`` or
+            ``DASK_SCHEDULER_ADDRESS`` is given, else serial for at most 4 pending inputs
+            and local otherwise.
+        address: Dask scheduler, ``tcp://host:8786`` or a ``scheduler.json`` path
+            (default ``DASK_SCHEDULER_ADDRESS``).
+        workers: worker processes of the local cluster (default 2).
+        threads_per_worker: torch threads per task, on every engine; None (default): the
+            machine's cores shared among the tasks that run at once
+            (:func:`~torchsym.runner.validate.default_threads`: ``workers`` of them on the
+            local engine, one serially; 1 on a remote scheduler), as ``torchsym detect``.
+        retries: resubmissions of a task whose worker died, before it is recorded as
+            ``"crashed"`` (default 2). Errors raised by a task are never retried.
+        max_in_flight: tasks in flight on a Dask engine (default: two per live worker
+            thread, one running and one waiting, so no worker waits for the driver).
+        connect_timeout: seconds to reach a remote scheduler (default 5).
+        imports: modules each worker imports first (to register your own solvers).
+    """
+
+    engine: str = "auto"
+    address: str | None = None
+    workers: int = 2
+    threads_per_worker: int | None = None
+    retries: int = 2
+    max_in_flight: int | None = None
+    connect_timeout: float = 5.0
+    imports: tuple[str, ...] = ()
+
+
+def _engine_options(options: EngineOptions | None, given: Mapping[str, Any]) -> EngineOptions:
+    """``options`` (or the defaults) with the keyword fields ``given`` replacing its own;
+    :class:`InputValueError` naming an unknown keyword."""
+    if options is not None and not isinstance(options, EngineOptions):
+        raise InputValueError(f"options: expected an EngineOptions or None, got {type(options).__name__}")
+    names = [f.name for f in dataclasses.fields(EngineOptions)]
+    unknown = [k for k in given if k not in names]
+    if unknown:
+        raise InputValueError(f"{unknown[0]}: not an option of torchsym.run; engine options: {', '.join(names)}")
+    if "imports" in given:
+        imports = given["imports"]
+        given = {**given, "imports": (imports,) if isinstance(imports, str) else tuple(imports)}
+    return dataclasses.replace(options or EngineOptions(), **given)
+
+
 def run(
     config: str | Path | Mapping[str, Any] | PipelineConfig,
     inputs: str | Path | Sequence[str | Path],
     out: str | Path,
     *,
-    engine: str = "auto",
-    address: str | None = None,
-    workers: int = 2,
-    threads_per_worker: int | None = None,
-    retries: int = 2,
+    options: EngineOptions | None = None,
     resume: bool = True,
     overrides: Mapping[str, Any] | None = None,
     figures: str | Path | None = None,
-    imports: Sequence[str] = (),
-    max_in_flight: int | None = None,
     max_inline: int | None = 1024,
-    connect_timeout: float = 5.0,
     progress: bool = False,
+    **engine_options: Any,
 ) -> RunSummary:
     """Run one pipeline config over every input and record each outcome in ``out``.
 
@@ -123,32 +166,19 @@ def run(
             ``multiview``, one scene per folder).
         out: the JSON-lines results file (:mod:`torchsym.runner.store`); inputs already
             done there with the same file and config are skipped.
-        engine: ``"serial"``, ``"local"`` (a Dask ``LocalCluster``), ``"dask"`` (the
-            scheduler at ``address``) or ``"auto"``: ``"dask"`` when ``address`` or
-            ``DASK_SCHEDULER_ADDRESS`` is given, else serial for at most 4 pending
-            inputs and local otherwise.
-        address: Dask scheduler, ``tcp://host:8786`` or a ``scheduler.json`` path
-            (default ``DASK_SCHEDULER_ADDRESS``).
-        workers: worker processes of the local cluster (default 2).
-        threads_per_worker: torch threads per task, on every engine; None (default): the
-            machine's cores shared among the tasks that run at once
-            (:func:`~torchsym.runner.validate.default_threads`: ``workers`` of them on the
-            local engine, one serially; 1 on a remote scheduler), as ``torchsym detect``.
-        retries: resubmissions of a task whose worker died, before it is recorded as
-            ``"crashed"`` (default 2). Errors raised by a task are never retried.
+        options: where and how the tasks run (:class:`EngineOptions`); its fields may also
+            be given as keywords (``engine="local", workers=4``), which replace the same
+            fields of ``options``.
         resume: False starts ``out`` afresh.
         overrides: settings of the config's last solver (``{"n_starts": 2}``, dotted keys
             for groups).
         figures: folder for each result's pictures (:func:`torchsym.viz.write_artifacts`)
             and the run's page ``index.html`` (:func:`torchsym.viz.index.write_index`);
             None writes none.
-        imports: modules each worker imports first (to register your own solvers).
-        max_in_flight: tasks in flight on a Dask engine (default: two per live worker thread, one running and one waiting, so no worker waits for the driver).
         max_inline: a result's arrays with more elements than this (per-point pairs,
             per-vertex maps) are kept in one ``.npz`` per input in ``<out stem>_arrays/``,
             referenced from the record (:mod:`torchsym.runner.store`); None keeps them all
             in the record (default 1024).
-        connect_timeout: seconds to reach a remote scheduler (default 5).
         progress: show a progress bar over completions (skipped inputs counted done).
 
     Returns:
@@ -160,6 +190,9 @@ def run(
         EngineError: the Dask scheduler cannot be reached.
     """
     t0 = time.perf_counter()
+    opts = _engine_options(options, engine_options)
+    engine, address, workers, threads_per_worker = opts.engine, opts.address, opts.workers, opts.threads_per_worker
+    retries, max_in_flight, connect_timeout, imports = opts.retries, opts.max_in_flight, opts.connect_timeout, opts.imports
     check_run_options(out=out, workers=workers, threads_per_worker=threads_per_worker, retries=retries,
                       max_in_flight=max_in_flight, connect_timeout=connect_timeout, figures=figures)
     if max_inline is not None and (isinstance(max_inline, bool) or not isinstance(max_inline, int) or max_inline < 0):

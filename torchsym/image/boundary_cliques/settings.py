@@ -48,7 +48,7 @@ class Cliques(Settings):
     solver: Literal["matching", "highs"] = setting(
         "matching", "LP of Eq. 2.11: matching (exact half-integral optimum) or highs (scipy linprog)"
     )
-    min_support: int = setting(3, "a clique with fewer pairs ends the search", low=2)
+    min_support: int = setting(3, "a clique with fewer pairs ends the search", low=2, high=10_000_000)
     gather_support: bool = setting(True, "every symmetric pair near a clique's axis joins its support")
 
 
@@ -59,7 +59,7 @@ class SiftCandidates(Settings):
     enabled: bool | None = setting(None, "add them; null: with score gradient only (they need it)")
     weight: float = setting(0.5, "factor on their axes' scores", low=0.0, low_open=True)
     max_keypoints: int = setting(1000, "the most SIFT keypoints", low=1)
-    min_support: int = setting(3, "the least pairs of a candidate (as cliques.min_support)", low=1)
+    min_support: int = setting(3, "the least pairs of a candidate (as cliques.min_support)", low=1, high=10_000_000)
     backend: Literal["kornia", "opencv"] = setting("opencv", "SIFT's implementation: opencv (CPU, fast) or kornia (any device)")
 
 
