@@ -19,8 +19,8 @@ def test_cardinality_and_values(monkeypatch, blob):
     seen = {}
     original = hypotheses.sign_basis_candidates
 
-    def spy(ws, m):
-        seen["out"], seen["k"] = original(ws, m), ws.plan.n_eigen
+    def spy(ws, m, pairs):
+        seen["out"], seen["k"] = original(ws, m, pairs), ws.plan.n_eigen
         return seen["out"]
 
     monkeypatch.setattr(solver, "sign_basis_candidates", spy)
