@@ -15,9 +15,10 @@ from torchsym.core import parallel
 from torchsym.mesh import fmaps
 from torchsym.mesh.intrinsic import hypotheses
 from torchsym.mesh.intrinsic.hypotheses import first_image
+from torchsym.mesh.intrinsic.probe import reflection_score
 from torchsym.mesh.intrinsic.workspace import Candidate, Workspace
 
-__all__ = ["choose", "is_weak", "rank_choice", "reflection_choice", "refine_score", "screen", "try_extrinsic"]
+__all__ = ["choose", "is_weak", "rank_choice", "reflection_choice", "refine_score", "screen", "test_hypotheses", "try_extrinsic"]
 
 logger = logging.getLogger(__name__)
 
@@ -79,35 +80,39 @@ def refine_score(ws: Workspace, image: np.ndarray | None) -> tuple[np.ndarray, n
     return np.array([*defects, ws.probe.distortion(refined)]), fitted, ()
 
 
-def reflection_choice(ws: Workspace, candidates: list[Candidate], table: np.ndarray) -> int | None:
+def reflection_choice(ws: Workspace, candidates: list[Candidate], table: np.ndarray) -> tuple[int | None, float]:
     """The refined hypothesis of least geodesic distortion (last column of ``table (H, width)``)
     below the limit whose map reverses the orientation at at least ``select.reflects`` of the
-    sampled vertices (not tested when the faces are not consistently wound); None if none."""
+    sampled vertices (not tested when the faces are not consistently wound: share 1); None if
+    none. And the share of sampled vertices where its map reverses the orientation."""
     distortion = np.where(np.isfinite(table).all(axis=1), table[:, -1], np.inf)
     read = None
     for row in np.argsort(distortion, kind="stable"):
         if not distortion[row] < ws.limit or candidates[row].refined is None:
-            return None
+            return None, 0.0
         if ws.orient is None:
-            return int(row)
+            return int(row), 1.0
         if read is None:
             read = np.union1d(ws.rows, ws.two_ring[ws.rows].indices)  # the orientation test reads the 2-rings
         vmap = np.full(ws.n, -1, dtype=np.int64)
         vmap[read] = ws.search.map_every_vertex(candidates[row].refined, read)
-        if ws.reversed_share(vmap) >= ws.settings.select.reflects:
-            return int(row)
-    return None
+        share = ws.reversed_share(vmap)
+        if share >= ws.settings.select.reflects:
+            return int(row), share
+    return None, 0.0
 
 
-def choose(ws: Workspace, candidates: list[Candidate], images: list[np.ndarray]) -> tuple[list[Candidate], np.ndarray, int, list[np.ndarray]]:
-    """Step 9: every hypothesis screened (in order: a duplicate of an earlier map is skipped) and
-    refined on threads; the row chosen (:func:`reflection_choice`, else :func:`rank_choice`).
+def test_hypotheses(
+    ws: Workspace, candidates: list[Candidate], images: list[np.ndarray], seen: list[np.ndarray]
+) -> tuple[list[Candidate], np.ndarray, list[np.ndarray]]:
+    """Step 9's tests: every hypothesis screened (in order: a duplicate of a map in ``seen`` or of an
+    earlier one is skipped) and refined on threads.
 
     Returns:
         The hypotheses with their start and ZoomOut ``C`` (:class:`Candidate`), their tests
-        ``(H, width)``, the chosen row, and the maps on the sample seen (for step 10's screen).
+        ``(H, width)``, and ``seen`` with their maps on the sample added.
     """
-    seen, screened = [], []
+    seen, screened = list(seen), []
     for cand, image in zip(candidates, images):
         image, start, todo = screen(ws, seen, cand, image)
         seen.append(image)
@@ -117,9 +122,17 @@ def choose(ws: Workspace, candidates: list[Candidate], images: list[np.ndarray])
         dataclasses.replace(cand, start=start, refined=fitted, notes=cand.notes + notes)
         for cand, (start, _), (_, fitted, notes) in zip(candidates, screened, found)
     ]
-    table = np.stack([tests for tests, _, _ in found])  # (H, 3), or (H, 2) without refinement
-    best = reflection_choice(ws, tested, table)
-    return tested, table, rank_choice(table, ws.limit) if best is None else best, seen
+    return tested, np.stack([tests for tests, _, _ in found]), seen  # (H, 3), or (H, 2) without refinement
+
+
+def choose(ws: Workspace, candidates: list[Candidate], table: np.ndarray) -> tuple[int, float | None]:
+    """Step 9's choice among the tested hypotheses (``table (H, width)``): :func:`reflection_choice`, else
+    :func:`rank_choice`. And the chosen map's score as a reflection (:func:`~torchsym.mesh.intrinsic.probe.reflection_score`;
+    None: no reflection passed)."""
+    best, share = reflection_choice(ws, candidates, table)
+    if best is None:
+        return rank_choice(table, ws.limit), None
+    return best, reflection_score(float(table[best, -1]), share, ws.settings.select.score_distortion)
 
 
 def try_extrinsic(

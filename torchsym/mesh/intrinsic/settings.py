@@ -74,6 +74,10 @@ class Hypotheses(Settings):
         4, "also start from C = diag(1, s) in this many first eigenfunctions, every sign vector s but all +1 (0: off)",
         low=0, high=8,
     )
+    sign_basis_below: float = setting(
+        0.8, "the sign hypotheses are added only when no other hypothesis passes step 9 as a reflection of at least "
+        "this score ((1 - distortion / select.score_distortion) x reversed share; above 1: always added)", low=0.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)

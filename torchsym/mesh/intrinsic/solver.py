@@ -36,7 +36,7 @@ from torchsym.mesh.intrinsic.refine import finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
-from torchsym.mesh.intrinsic.select import choose, is_weak, try_extrinsic
+from torchsym.mesh.intrinsic.select import choose, is_weak, test_hypotheses, try_extrinsic
 from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
 from torchsym.mesh.intrinsic.workspace import (
@@ -76,10 +76,11 @@ def intrinsic_symmetry(
     5. Signs of the eigenfunctions from geodesics between pairs, ``C = diag(s)`` (Sec. 6.2.5).
     6. The correction ``R`` on SO(k) of Eq. 6.4 (Sec. 6.2.6).
     7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
-    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``), and
-       ``C = diag(1, s)`` in the first eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``).
+    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
     9. Choice by ZoomOut on a vertex sample: the least-distorting hypothesis that reverses the
-       orientation (a reflection), else the tests of an isometric involution.
+       orientation (a reflection), else the tests of an isometric involution. Where no reflection
+       scores ``hypotheses.sign_basis_below``, step 8 adds ``C = diag(1, s)`` in the first
+       eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``) and step 9 chooses again.
     10. The vertices' mirror plane when the chosen map is weak and the mesh has holes (``extrinsic``).
     11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
     12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
@@ -132,7 +133,11 @@ def intrinsic_symmetry(
     watch.add_all(seconds)
 
     with watch("select"):
-        candidates, table, best, seen = choose(ws, candidates, images)  # step 9
+        candidates, table, seen = test_hypotheses(ws, candidates, images, [])  # step 9
+        best, confidence = choose(ws, candidates, table)
+        if _more_hypotheses(settings, confidence):  # step 8's sign hypotheses, then step 9 again
+            candidates, table, seen = _with_sign_hypotheses(ws, candidates, table, seen)
+            best, confidence = choose(ws, candidates, table)
     extrinsic_note = None
     holed = surface.holes_closed > 0 or spectrum.has_boundary
     if settings.extrinsic.enabled and holed and is_weak(table[best], settings.extrinsic.weak_defect):
@@ -283,8 +288,8 @@ def _orientation_branch(ws: Workspace) -> tuple:
 
 def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list) -> tuple:
     """Steps 5-8: the pairings' hypotheses beside the orientation hypothesis (with step 9's probe), on two
-    threads, then the sign hypotheses. Returns the workspace with its probe, the hypotheses, their maps on
-    the sample ``(S,)`` and the seconds per step."""
+    threads. Returns the workspace with its probe, the hypotheses, their maps on the sample ``(S,)`` and
+    the seconds per step."""
     pairings = partial(pairing_candidates, ws, pair_sets, pair_notes, sign_draws)
     if ws.settings.hypotheses.orientation:
         (candidates, images, seconds), (cand, t_orientation, probe, t_probe, image) = parallel.run_branches(
@@ -295,15 +300,22 @@ def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: li
         seconds["orientation"] = t_orientation
     else:
         (candidates, images, seconds), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
-    ws = dataclasses.replace(ws, probe=probe)
     seconds["select"] += t_probe
-    if ws.settings.hypotheses.sign_basis >= 2:
-        tic = time.perf_counter()
-        signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis, candidates[0].pairs)
-        candidates = [*candidates, *signed]
-        images = [*images, *(sign_basis_image(ws, cand) for cand in signed)]
-        seconds["select"] += time.perf_counter() - tic
-    return ws, candidates, images, seconds
+    return dataclasses.replace(ws, probe=probe), candidates, images, seconds
+
+
+def _more_hypotheses(settings: IntrinsicSymmetrySettings, confidence: float | None) -> bool:
+    """Whether step 8's sign hypotheses are added: on, and no reflection of at least ``hypotheses.sign_basis_below`` found."""
+    hyp = settings.hypotheses
+    return hyp.sign_basis >= 2 and (confidence is None or confidence < hyp.sign_basis_below)
+
+
+def _with_sign_hypotheses(ws: Workspace, candidates: list[Candidate], table: np.ndarray, seen: list) -> tuple:
+    """Step 8's sign hypotheses, tested as in step 9 after ``candidates`` (tests ``table``); all of them and their tests."""
+    signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis, candidates[0].pairs)
+    images = [sign_basis_image(ws, cand) for cand in signed]
+    more, more_table, seen = test_hypotheses(ws, signed, images, seen)
+    return [*candidates, *more], np.vstack([table, more_table]), seen
 
 
 def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, extrinsic_note: str | None) -> list[str]:
