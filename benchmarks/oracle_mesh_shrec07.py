@@ -41,17 +41,10 @@ from torchsym.mesh.intrinsic.refine import thesis_map
 from torchsym.mesh.validate import validate_mesh
 from torchsym.metrics.mesh import correspondence_rate
 
-from bench_mesh_shrec07 import DATA, landmark_pairs  # noqa: E402 (benchmarks/ is on sys.path when run as a script)
+from bench_mesh_shrec07 import DATA, landmark_pairs, number, split_of  # noqa: E402 (benchmarks/ is on sys.path when run as a script)
 
 HERE = Path(__file__).resolve().parent
 RIGHT = 0.75
-
-
-def split_of(name: str, index: dict) -> str:
-    """``"dev"`` for the first 5 meshes of a class (by number), else ``"val"``."""
-    number = lambda n: int(n.rsplit("_", 1)[1].split(".")[0])  # noqa: E731
-    same = sorted((n for n in index if index[n]["class"] == index[name]["class"]), key=number)
-    return "dev" if same.index(name) < 5 else "val"
 
 
 class Recorder:
@@ -87,7 +80,19 @@ def involution_share(ws, image_map: np.ndarray) -> float:
     return float(np.mean(probe.balls[np.arange(x.size), back] < probe.radius))
 
 
-def score_candidates(mesh, entry: dict, rec: Recorder) -> list[dict]:
+def extrinsic_residual(v: np.ndarray, rows: np.ndarray, image: np.ndarray) -> float:
+    """RMS distance between ``v[image]`` and ``v[rows]`` moved by their best improper orthogonal map (a mirror
+    and a rotation), over the RMS radius of ``v[rows]``: 0 for a map of an extrinsic reflection."""
+    x, y = v[rows] - v[rows].mean(axis=0), v[image] - v[image].mean(axis=0)
+    u, _, vt = np.linalg.svd(x.T @ y)
+    d = np.ones(3)
+    d[2] = -1.0 if np.linalg.det(u @ vt) > 0 else 1.0  # det of the orthogonal map: -1
+    q = u @ np.diag(d) @ vt  # x @ q ~ y
+    return float(np.sqrt(np.mean(np.sum((x @ q - y) ** 2, axis=1)) / np.mean(np.sum(x**2, axis=1))))
+
+
+def score_candidates(mesh, entry: dict, rec: Recorder) -> tuple[list[dict], float]:
+    """Each hypothesis's row (rates, tests) and step 9's limit on the distortion."""
     ws, candidates, table, best = rec.calls[-1]
     pairs = landmark_pairs(entry)
     checked = validate_mesh(mesh, components="largest", min_vertices=14)
@@ -126,8 +131,9 @@ def score_candidates(mesh, entry: dict, rec: Recorder) -> list[dict]:
             row["involution"] = involution_share(ws, full)
             row["near_self"] = ws.probe.near_self(full[ws.rows])
             row["distortion"] = ws.probe.distortion(full[ws.rows])
+            row["extrinsic"] = extrinsic_residual(ws.v, ws.rows, full[ws.rows])
         out.append(row)
-    return out
+    return out, ws.limit
 
 
 def verdict(final: float, cands: list[dict]) -> str:
@@ -146,7 +152,6 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(int(os.environ.get("OMP_NUM_THREADS", "1")))
     index = json.loads((DATA / "landmarks.json").read_text())
-    number = lambda n: int(n.rsplit("_", 1)[1].split(".")[0])  # noqa: E731
     names = sorted(index, key=lambda n: (index[n]["class"], number(n)))
     if args.only:
         names = [n for n in names if index[n]["class"] in args.only.split(",")]
@@ -160,10 +165,10 @@ def main() -> None:
             result = torchsym.detect(mesh, **over) if over else torchsym.detect(mesh)
             seconds = time.perf_counter() - tic
         final = float(correspondence_rate(mesh, result.map.numpy(), landmarks=landmark_pairs(entry)).rate)
-        cands = score_candidates(mesh, entry, rec)
+        cands, limit = score_candidates(mesh, entry, rec)
         row = {"mesh": name, "class": entry["class"], "split": split_of(name, index), "vertices": mesh.num_vertices,
                "seconds": seconds, "final": final, "score": float(result.score), "hypothesis": result.hypothesis,
-               "candidates": cands, "verdict": verdict(final, cands)}
+               "limit": limit, "candidates": cands, "verdict": verdict(final, cands)}
         rows.append(row)
         best = max([c["refined_rate"] or 0.0 for c in cands])
         print(f"{name:18s} {row['split']} final {final:.2f} best refined {best:.2f} {row['verdict']:6s} "
