@@ -107,7 +107,7 @@ class Select(Settings):
         0.14, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
         low=0.0, low_open=True,
     )
-    max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges", low=0.0, low_open=True)
+    max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges (the input's, on a coarse copy)", low=0.0, low_open=True)
     score_distortion: float = setting(
         0.25, "the returned map's sampled geodesic distortion at which its score reaches 0", low=0.0, low_open=True
     )

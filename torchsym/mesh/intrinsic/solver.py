@@ -202,12 +202,14 @@ def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.G
     v = checked.mesh.vertices.detach().cpu().double().numpy()  # (V', 3)
     f = checked.mesh.faces.detach().cpu().numpy()  # (F', 3)
     copy = coarse_copy(v, f, settings.coarse.n_vertices, np.random.default_rng(draw_seed(gen)))
-    # the copy's own small holes (where regions meet irregularly) are no holes of the input: step 10 follows the input
+    # the copy's own small holes (where regions meet irregularly) are no holes of the input: step 10
+    # and step 9's limit on the distortion follow the input
     holed = bool((edge_face_counts(f)[1] == 1).any())
+    select = settings.select if holed else dataclasses.replace(settings.select, max_distortion_open=settings.select.max_distortion)
     inner = intrinsic_symmetry(
         Mesh(torch.from_numpy(copy.vertices), torch.from_numpy(copy.faces)),
         dataclasses.replace(
-            settings, coarse=dataclasses.replace(settings.coarse, enabled=False),
+            settings, coarse=dataclasses.replace(settings.coarse, enabled=False), select=select,
             extrinsic=dataclasses.replace(settings.extrinsic, enabled=settings.extrinsic.enabled and holed),
         ),
         generator=gen,
