@@ -23,13 +23,13 @@ def test_smoke_stopwatch():
 
 def test_frozen(blob, monkeypatch):
     calls = []
-    original = solver.test_hypotheses
+    original = solver.screen_and_refine
 
     def spy(ws, candidates, images, seen):
         calls.append((ws, list(candidates), original(ws, candidates, images, seen)))
         return calls[-1][2]
 
-    monkeypatch.setattr(solver, "test_hypotheses", spy)
+    monkeypatch.setattr(solver, "screen_and_refine", spy)
     solver.intrinsic_symmetry(blob[0])
     ws, before, (after, table, seen) = calls[0]
     assert isinstance(ws, Workspace) and ws.probe is not None

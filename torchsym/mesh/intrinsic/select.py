@@ -18,7 +18,7 @@ from torchsym.mesh.intrinsic.hypotheses import first_image
 from torchsym.mesh.intrinsic.probe import reflection_score
 from torchsym.mesh.intrinsic.workspace import Candidate, Workspace
 
-__all__ = ["choose", "is_weak", "rank_choice", "reflection_choice", "refine_score", "screen", "test_hypotheses", "try_extrinsic"]
+__all__ = ["choose", "is_weak", "rank_choice", "reflection_choice", "refine_score", "screen", "screen_and_refine", "try_extrinsic"]
 
 logger = logging.getLogger(__name__)
 
@@ -102,7 +102,7 @@ def reflection_choice(ws: Workspace, candidates: list[Candidate], table: np.ndar
     return None, 0.0
 
 
-def test_hypotheses(
+def screen_and_refine(
     ws: Workspace, candidates: list[Candidate], images: list[np.ndarray], seen: list[np.ndarray]
 ) -> tuple[list[Candidate], np.ndarray, list[np.ndarray]]:
     """Step 9's tests: every hypothesis screened (in order: a duplicate of a map in ``seen`` or of an

@@ -36,7 +36,7 @@ from torchsym.mesh.intrinsic.refine import finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
-from torchsym.mesh.intrinsic.select import choose, is_weak, test_hypotheses, try_extrinsic
+from torchsym.mesh.intrinsic.select import choose, is_weak, screen_and_refine, try_extrinsic
 from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
 from torchsym.mesh.intrinsic.workspace import (
@@ -133,7 +133,7 @@ def intrinsic_symmetry(
     watch.add_all(seconds)
 
     with watch("select"):
-        candidates, table, seen = test_hypotheses(ws, candidates, images, [])  # step 9
+        candidates, table, seen = screen_and_refine(ws, candidates, images, [])  # step 9
         best, confidence = choose(ws, candidates, table)
         if _more_hypotheses(settings, confidence):  # step 8's sign hypotheses, then step 9 again
             candidates, table, seen = _with_sign_hypotheses(ws, candidates, table, seen)
@@ -316,7 +316,7 @@ def _with_sign_hypotheses(ws: Workspace, candidates: list[Candidate], table: np.
     """Step 8's sign hypotheses, tested as in step 9 after ``candidates`` (tests ``table``); all of them and their tests."""
     signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis, candidates[0].pairs)
     images = [sign_basis_image(ws, cand) for cand in signed]
-    more, more_table, seen = test_hypotheses(ws, signed, images, seen)
+    more, more_table, seen = screen_and_refine(ws, signed, images, seen)
     return [*candidates, *more], np.vstack([table, more_table]), seen
 
 
