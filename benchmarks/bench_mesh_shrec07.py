@@ -1,24 +1,26 @@
 """Intrinsic symmetry on published meshes: SHREC'07 watertight, landmark protocol (thesis Sec. 6.3.2).
 
-The 40 meshes of ``../shared/data/meshes_shrec07`` (8 classes, 3.2k-28k vertices, as
+The 96 meshes of ``../shared/data/meshes_shrec07`` (8 classes x 12, 3.2k-53k vertices, as
 released) with their annotated symmetric landmark pairs (Kim et al. 2010). A landmark's
 predicted mirror is correct within geodesic ``sqrt(area / 20 pi)`` of its annotated partner,
 both directions of every pair (a pair ``[i, i]`` once); the mesh rate is the share of
 meshes above 75 %. Geodesics on the surface (edge paths straightened by FlipOut, exact
-polyhedral geodesics) and along edges alone (stricter) side by side.
+polyhedral geodesics) and along edges alone (stricter) side by side. The first 5 meshes of
+each class (by number) are the dev set the method was chosen on, the other 7 the
+validation set; every figure is given for each apart.
 
 Runs, in one process: ``torchsym.detect(mesh)`` with the shipped config
 (``configs/mesh_intrinsic.yaml``), and pyFM's orientation-reversing functional self-map as
-the peer (``bench_mesh.pyfm_map``). Reports per class, median seconds per mesh (with the
-machine's load), and the ROC AUC of the result's ``score`` for telling right maps (rate
-above 75 %) from wrong ones. ``--variant NAME=JSON`` runs the solver with settings under
-choice (rows to ``results/mesh_shrec07_NAME.json``); ``--loco A,B`` then adds the
-leave-one-class-out row: each class scored with the variant (shipped, A, B) that does best
-on the other seven.
+the peer (``bench_mesh.pyfm_map``). Reports per class, median seconds per mesh and per step
+(the result's ``timings``, with the machine's load), and the ROC AUC of the result's
+``score`` for telling right maps (rate above 75 %) from wrong ones. ``--variant NAME=JSON``
+runs the solver with settings under choice (rows to ``results/mesh_shrec07_NAME.json``);
+``--loco A,B`` then adds the leave-one-class-out row on the dev set. ``--timing JSON``: wall and
+processor seconds of ``detect`` against it with these overrides, interleaved, one mesh in three.
 
+    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py [--no-pyfm] [--threads 1] [--loco A,B] [--report-only] [--tag TEXT]
     PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py --variant NAME='{"hypotheses.sign_basis": 0}'
-    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py --pyfm-only 5
-    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py [--no-pyfm] [--loco A,B] [--report-only] [--tag TEXT]
+    PYTHONPATH=. python benchmarks/bench_mesh_shrec07.py --timing '{"hypotheses.sign_basis": 0}'
 
 Writes ``benchmarks/results/mesh_shrec07.md`` and ``.json``.
 """
@@ -34,10 +36,10 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+import torch
 
 import torchsym
 from torchsym.io import read_mesh
-from torchsym.mesh import intrinsic_symmetry
 from torchsym.metrics.mesh import correspondence_rate
 
 from bench_mesh import pyfm_map  # noqa: E402 (benchmarks/ is on sys.path when run as a script)
@@ -62,6 +64,16 @@ def roc_auc(scores: list[float], positive: list[bool]) -> float:
     return float(((pos[:, None] > neg[None, :]).sum() + 0.5 * (pos[:, None] == neg[None, :]).sum()) / (pos.size * neg.size))
 
 
+def number(name: str) -> int:
+    return int(name.rsplit("_", 1)[1].split(".")[0])
+
+
+def split_of(name: str, index: dict) -> str:
+    """``"dev"`` for the first 5 meshes of a class (by number), else ``"val"``."""
+    same = sorted((n for n in index if index[n]["class"] == index[name]["class"]), key=number)
+    return "dev" if same.index(name) < 5 else "val"
+
+
 def run(names: list[str], index: dict, solve, use_pyfm: bool) -> list[dict]:
     rows = []
     for name in names:
@@ -72,17 +84,18 @@ def run(names: list[str], index: dict, solve, use_pyfm: bool) -> list[dict]:
         seconds = time.perf_counter() - tic
         pred = result.map.numpy()
         row = {
-            "mesh": name, "class": entry["class"], "vertices": mesh.num_vertices, "seconds": seconds,
+            "mesh": name, "class": entry["class"], "split": split_of(name, index), "vertices": mesh.num_vertices,
+            "seconds": seconds, "timings": result.timings,
             "surface": correspondence_rate(mesh, pred, landmarks=pairs).rate,
             "edges": correspondence_rate(mesh, pred, landmarks=pairs, geodesics="edges").rate,
-            "score": result.score, "hypothesis": result.hypothesis,
+            "score": result.score, "hypothesis": result.hypothesis, "load": os.getloadavg()[0],
         }
         if use_pyfm:
             p2p, t = pyfm_map(mesh)
             row["pyfm"] = correspondence_rate(mesh, p2p, landmarks=pairs).rate
             row["pyfm_seconds"] = t
-        print(f"{name:20s} {row['vertices']:6d} {row['surface']:.3f} {row['edges']:.3f} score {row['score']:.2f} "
-              f"{seconds:.2f}s {row['hypothesis']}" + (f" | pyFM {row['pyfm']:.3f}" if use_pyfm else ""), flush=True)
+        print(f"{name:20s} {row['split']} {row['vertices']:6d} {row['surface']:.3f} {row['edges']:.3f} score {row['score']:.2f} "
+              f"{seconds:.2f}s {row['hypothesis']}" + (f" | pyFM {row['pyfm']:.3f} {t:.1f}s" if use_pyfm else ""), flush=True)
         rows.append(row)
     return rows
 
@@ -93,9 +106,33 @@ def summary(rows: list[dict], key: str = "surface") -> dict:
         by[r["class"]].append(r[key])
     rates = [r[key] for r in rows]
     return {
-        "rate": float(np.mean(rates)), "mesh_rate": float(np.mean(np.array(rates) > 0.75)),
-        "classes": {c: float(np.mean(v)) for c, v in by.items()},
+        "meshes": len(rows), "rate": float(np.mean(rates)), "mesh_rate": float(np.mean(np.array(rates) > 0.75)),
+        "classes": {c: float(np.mean(v)) for c, v in sorted(by.items())},
     }
+
+
+def split_summary(rows: list[dict]) -> dict:
+    """Per split (``dev``, ``val``): rates on the surface and along edges, pyFM's, median seconds and the score's AUC."""
+    out = {}
+    for split in ("dev", "val"):
+        mine = [r for r in rows if r["split"] == split]
+        if not mine:
+            continue
+        out[split] = {
+            "surface": summary(mine), "edges": summary(mine, "edges"),
+            "median_seconds": statistics.median(r["seconds"] for r in mine),
+            "score_auc": roc_auc([r["score"] for r in mine], [r["surface"] > 0.75 for r in mine]),
+        }
+        if all("pyfm" in r for r in mine):
+            out[split]["pyfm"] = summary(mine, "pyfm")
+            out[split]["pyfm_median_seconds"] = statistics.median(r["pyfm_seconds"] for r in mine)
+    return out
+
+
+def step_seconds(rows: list[dict]) -> dict[str, float]:
+    """Median seconds of each step over the meshes (0 where a step did not run)."""
+    steps = sorted({k for r in rows for k in r.get("timings", {})})
+    return {k: statistics.median(r["timings"].get(k, 0.0) for r in rows) for k in steps}
 
 
 def leave_one_class_out(variant_rows: dict[str, list[dict]]) -> dict:
@@ -112,44 +149,37 @@ def leave_one_class_out(variant_rows: dict[str, list[dict]]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--no-pyfm", action="store_true", help="no pyFM in this run (rows of --pyfm-only are used when present)")
+    ap.add_argument("--no-pyfm", action="store_true", help="no pyFM in this run")
     ap.add_argument("--variant", default="", help='NAME=JSON: run intrinsic_symmetry with these overrides instead, '
                                                    'rows to results/mesh_shrec07_NAME.json')
-    ap.add_argument("--loco", default="", help="comma-separated variant names whose rows (run before) enter the leave-one-class-out choice")
-    ap.add_argument("--pyfm-only", type=int, default=0, metavar="STEP",
-                    help="run only pyFM, on every STEP-th mesh of each class, rows to results/mesh_shrec07_pyfm.json")
+    ap.add_argument("--loco", default="", help="comma-separated variant names whose rows (run before) enter the leave-one-class-out choice (dev set)")
+    ap.add_argument("--only", default="", help="comma-separated classes, or dev / val")
     ap.add_argument("--report-only", action="store_true", help="rebuild the report from the rows of the last run (with --loco)")
-    ap.add_argument("--timing", action="store_true",
-                    help="wall and processor seconds of detect against sign_basis 0, interleaved, one mesh per class "
-                         "(results/mesh_shrec07_timing.md)")
+    ap.add_argument("--timing", default="", metavar="JSON",
+                    help="wall and processor seconds of detect against detect with these overrides, interleaved, "
+                         "every third mesh (results/mesh_shrec07_timing.md)")
+    ap.add_argument("--threads", type=int, default=0, help="torch's threads (0: as it is)")
     ap.add_argument("--tag", default="")
     args = ap.parse_args()
+    if args.threads:
+        torch.set_num_threads(args.threads)
     index = json.loads((DATA / "landmarks.json").read_text())
-    names = sorted(index, key=lambda n: (index[n]["class"], n))
+    names = sorted(index, key=lambda n: (index[n]["class"], number(n)))
+    if args.only:
+        keep = set(args.only.split(","))
+        names = [n for n in names if index[n]["class"] in keep or split_of(n, index) in keep]
     load = os.getloadavg()
     if args.timing:
-        timing(index, names)
-        return
-    if args.pyfm_only:
-        rows = []
-        for name in names:
-            if int(name.rsplit("_", 1)[1].split(".")[0]) % 5 % args.pyfm_only:
-                continue
-            mesh = read_mesh(DATA / name)
-            p2p, t = pyfm_map(mesh)
-            rows.append({"mesh": name, "class": index[name]["class"], "pyfm": correspondence_rate(mesh, p2p, landmarks=landmark_pairs(index[name])).rate,
-                         "pyfm_seconds": t})
-            print(rows[-1], flush=True)
-        out = {"rows": rows, "load_before": load, "load_after": os.getloadavg()}
-        (HERE / "results" / "mesh_shrec07_pyfm.json").write_text(json.dumps(out, indent=1))
+        timing(index, names[::3], json.loads(args.timing), args.tag)
         return
     if args.variant:
         vname, over = args.variant.split("=", 1)
         over = json.loads(over)
-        rows = run(names, index, lambda m: intrinsic_symmetry(m, None, **over), False)
-        out = {"overrides": over, "rows": rows, "load_before": load, "load_after": os.getloadavg(), **summary(rows)}
+        rows = run(names, index, lambda m: torchsym.detect(m, **over), False)
+        out = {"overrides": over, "rows": rows, "load_before": load, "load_after": os.getloadavg(), "splits": split_summary(rows)}
         (HERE / "results" / f"mesh_shrec07_{vname}.json").write_text(json.dumps(out, indent=1))
-        print(vname, {k: out[k] for k in ("rate", "mesh_rate", "classes")})
+        print(vname, json.dumps({k: {"rate": v["surface"]["rate"], "mesh_rate": v["surface"]["mesh_rate"], "auc": v["score_auc"],
+                                     "classes": v["surface"]["classes"]} for k, v in out["splits"].items()}))
         return
     if args.report_only:
         last = json.loads((HERE / "results" / "mesh_shrec07.json").read_text())
@@ -158,28 +188,18 @@ def main() -> None:
         rows = run(names, index, torchsym.detect, not args.no_pyfm)
         load_after = os.getloadavg()
     out = {
-        "tag": args.tag, "load_before": load, "load_after": load_after, "rows": rows,
-        "surface": summary(rows), "edges": summary(rows, "edges"),
-        "median_seconds": statistics.median(r["seconds"] for r in rows),
-        "score_auc": roc_auc([r["score"] for r in rows], [r["surface"] > 0.75 for r in rows]),
+        "tag": args.tag, "threads": torch.get_num_threads(), "load_before": load, "load_after": load_after,
+        "load_during": [min(r["load"] for r in rows), max(r["load"] for r in rows)], "rows": rows,
+        "splits": split_summary(rows), "median_seconds": statistics.median(r["seconds"] for r in rows),
+        "step_seconds": step_seconds(rows),
     }
-    peer = HERE / "results" / "mesh_shrec07_pyfm.json"
-    if args.no_pyfm and peer.exists():  # pyFM run apart, on some of the meshes
-        pyfm_rows = json.loads(peer.read_text())["rows"]
-        same = {r["mesh"]: r for r in rows}
-        out["pyfm"] = summary(pyfm_rows, "pyfm")
-        out["pyfm_meshes"] = len(pyfm_rows)
-        out["torchsym_on_pyfm_meshes"] = summary([same[r["mesh"]] for r in pyfm_rows])
-        out["pyfm_median_seconds"] = statistics.median(r["pyfm_seconds"] for r in pyfm_rows)
-    elif not args.no_pyfm:
-        out["pyfm"] = summary(rows, "pyfm")
-        out["pyfm_median_seconds"] = statistics.median(r["pyfm_seconds"] for r in rows)
     if args.loco:
-        variant_rows = {"shipped": rows}
+        dev = lambda rs: [r for r in rs if r.get("split", split_of(r["mesh"], index)) == "dev"]  # noqa: E731
+        variant_rows = {"shipped": dev(rows)}
         for vname in args.loco.split(","):
             path = HERE / "results" / f"mesh_shrec07_{vname}.json"
             if path.exists():
-                variant_rows[vname] = json.loads(path.read_text())["rows"]
+                variant_rows[vname] = dev(json.loads(path.read_text())["rows"])
             else:
                 print(f"no rows of variant {vname}: left out of the choice", flush=True)
         out["variants"] = {v: summary(r) for v, r in variant_rows.items()}
@@ -189,24 +209,26 @@ def main() -> None:
     print(report(out))
 
 
-def timing(index: dict, names: list[str]) -> None:
-    """A/B of the shipped config against it without the sign hypotheses, interleaved per mesh."""
-    runs = {"shipped": lambda m: torchsym.detect(m), "sign_basis 0": lambda m: intrinsic_symmetry(m, None, **{"hypotheses.sign_basis": 0})}
+def timing(index: dict, names: list[str], over: dict, tag: str) -> None:
+    """A/B of the shipped config against it with ``over``, interleaved per mesh (the order alternating)."""
+    runs = {"shipped": lambda m: torchsym.detect(m), f"with {json.dumps(over)}": lambda m: torchsym.detect(m, **over)}
     rows = []
-    for name in names[4::5]:  # one mesh per class
+    for i, name in enumerate(names):
         mesh = read_mesh(DATA / name)
-        for label, solve in runs.items():
+        for label in list(runs)[:: 1 if i % 2 == 0 else -1]:
             wall, cpu = time.perf_counter(), time.process_time()
-            solve(mesh)
-            rows.append({"mesh": name, "run": label, "wall": time.perf_counter() - wall, "cpu": time.process_time() - cpu,
-                         "load": os.getloadavg()[0]})
+            runs[label](mesh)
+            rows.append({"mesh": name, "run": label, "vertices": mesh.num_vertices, "wall": time.perf_counter() - wall,
+                         "cpu": time.process_time() - cpu, "load": os.getloadavg()[0]})
             print(rows[-1], flush=True)
-    lines = ["# Seconds per mesh on SHREC'07, shipped config against sign_basis 0 (interleaved)", "",
-             "`python benchmarks/bench_mesh_shrec07.py --timing`; processor seconds count every thread of the solver.", "",
-             "| run | median wall s | median processor s | load during |", "|---|---|---|---|"]
+    lines = [f"# Seconds per mesh on SHREC'07, shipped config against {json.dumps(over)} (interleaved)", "",
+             f"`python benchmarks/bench_mesh_shrec07.py --timing '{json.dumps(over)}'` {tag}: every third of the 96 meshes, "
+             f"{torch.get_num_threads()} torch threads; processor seconds count every thread of the solver.", "",
+             "| run | meshes | median wall s | median processor s | load during |", "|---|---|---|---|---|"]
     for label in runs:
         mine = [r for r in rows if r["run"] == label]
-        lines.append(f"| {label} | {statistics.median(r['wall'] for r in mine):.2f} | {statistics.median(r['cpu'] for r in mine):.2f} | "
+        lines.append(f"| {label} | {len(mine)} | {statistics.median(r['wall'] for r in mine):.2f} | "
+                     f"{statistics.median(r['cpu'] for r in mine):.2f} | "
                      f"{min(r['load'] for r in mine):.1f}-{max(r['load'] for r in mine):.1f} |")
     (HERE / "results" / "mesh_shrec07_timing.json").write_text(json.dumps(rows, indent=1))
     (HERE / "results" / "mesh_shrec07_timing.md").write_text("\n".join(lines) + "\n")
@@ -214,43 +236,51 @@ def timing(index: dict, names: list[str]) -> None:
 
 
 def report(out: dict) -> str:
-    classes = list(out["surface"]["classes"])
     pct = lambda x: f"{100 * x:.1f}"  # noqa: E731
     lines = [
         "# Intrinsic symmetry on SHREC'07 watertight meshes as released (landmark protocol)",
         "",
-        f"`python benchmarks/bench_mesh_shrec07.py` {out['tag']}; load average {out['load_before'][0]:.1f} before, "
-        f"{out['load_after'][0]:.1f} after (2 shared cores). `torchsym.detect(mesh)`, shipped config.",
+        f"`python benchmarks/bench_mesh_shrec07.py` {out['tag']}; {out['threads']} torch threads; load average "
+        f"{out['load_before'][0]:.1f} before, {out['load_during'][0]:.1f}-{out['load_during'][1]:.1f} during, "
+        f"{out['load_after'][0]:.1f} after (2 shared cores). `torchsym.detect(mesh)`, shipped config; pyFM in the same run. "
+        "Dev: the first 5 meshes of each class (the method was chosen on them); val: the other 7.",
         "",
-        "| method | geodesics | rate % | mesh rate % | " + " | ".join(classes) + " |",
-        "|---|---|---|---|" + "---|" * len(classes),
     ]
-    rows = [("torchsym", "surface", out["surface"]), ("torchsym", "edges", out["edges"])]
-    if "pyfm" in out:
-        subset = f" ({out['pyfm_meshes']} meshes)" if "pyfm_meshes" in out else ""
-        rows.append((f"pyFM{subset}", "surface", out["pyfm"]))
-        if "torchsym_on_pyfm_meshes" in out:
-            rows.append((f"torchsym on the same{subset}", "surface", out["torchsym_on_pyfm_meshes"]))
-    for variant, s in out.get("variants", {}).items():
-        if variant != "shipped":
-            rows.append((f"variant {variant} (in-sample)", "surface", s))
+    for split, s in out["splits"].items():
+        classes = list(s["surface"]["classes"])
+        lines += [
+            f"## {split} ({s['surface']['meshes']} meshes)", "",
+            "| method | geodesics | rate % | mesh rate % | " + " | ".join(classes) + " |",
+            "|---|---|---|---|" + "---|" * len(classes),
+        ]
+        rows = [("torchsym", "surface", s["surface"]), ("torchsym", "edges", s["edges"])]
+        if "pyfm" in s:
+            rows.append(("pyFM", "surface", s["pyfm"]))
+        for method, geo, t in rows:
+            lines.append(f"| {method} | {geo} | {pct(t['rate'])} | {pct(t['mesh_rate'])} | "
+                         + " | ".join(pct(t["classes"][c]) for c in classes) + " |")
+        lines += [
+            "",
+            f"Median seconds per mesh: torchsym {s['median_seconds']:.2f}"
+            + (f", pyFM {s['pyfm_median_seconds']:.2f}" if "pyfm_median_seconds" in s else "") + ". "
+            f"ROC AUC of `result.score` (right map: rate above 75 %): {s['score_auc']:.3f}.",
+            "",
+        ]
     if "loco" in out:
-        rows.append(("leave-one-class-out choice", "surface", out["loco"]))
-    for method, geo, s in rows:
-        lines.append(f"| {method} | {geo} | {pct(s['rate'])} | {pct(s['mesh_rate'])} | "
-                     + " | ".join(pct(s["classes"][c]) for c in classes) + " |")
-    lines += [
-        "",
-        f"Median seconds per mesh: torchsym {out['median_seconds']:.2f}"
-        + (f", pyFM {out['pyfm_median_seconds']:.2f}" if "pyfm_median_seconds" in out else "") + ".",
-        f"ROC AUC of `result.score` (right map: rate above 75 %): {out['score_auc']:.3f}.",
-    ]
-    if "loco" in out:
-        lines.append(f"Leave-one-class-out picks: {out['loco']['picks']}.")
-    lines += ["", "| mesh | vertices | rate % | edges % | score | hypothesis | s |", "|---|---|---|---|---|---|---|"]
+        lines += ["## Variants on the dev set", "", "| variant | rate % | mesh rate % |", "|---|---|---|"]
+        for variant, t in out["variants"].items():
+            lines.append(f"| {variant} (in-sample) | {pct(t['rate'])} | {pct(t['mesh_rate'])} |")
+        lines += [f"| leave-one-class-out choice | {pct(out['loco']['rate'])} | {pct(out['loco']['mesh_rate'])} |", "",
+                  f"Leave-one-class-out picks: {out['loco']['picks']}.", ""]
+    lines += [f"## Seconds per step (median over the {len(out['rows'])} meshes; all meshes {out['median_seconds']:.2f} s)", "",
+              "Each step's own stopwatch (`result.timings`); branches on threads count their own time.", "",
+              "| " + " | ".join(out["step_seconds"]) + " |", "|" + "---|" * len(out["step_seconds"]),
+              "| " + " | ".join(f"{v:.3f}" for v in out["step_seconds"].values()) + " |", ""]
+    lines += ["## Meshes", "", "| mesh | split | vertices | rate % | edges % | score | hypothesis | s | pyFM % |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for r in out["rows"]:
-        lines.append(f"| {r['mesh']} | {r['vertices']} | {pct(r['surface'])} | {pct(r['edges'])} | {r['score']:.2f} | "
-                     f"{r['hypothesis']} | {r['seconds']:.2f} |")
+        lines.append(f"| {r['mesh']} | {r['split']} | {r['vertices']} | {pct(r['surface'])} | {pct(r['edges'])} | {r['score']:.2f} | "
+                     f"{r['hypothesis']} | {r['seconds']:.2f} | {pct(r['pyfm']) if 'pyfm' in r else ''} |")
     return "\n".join(lines) + "\n"
 
 

@@ -46,6 +46,23 @@ class TestSolveOnCopy:
         assert result.pairs.max() < mesh.num_vertices and result.map_before_refine.shape == (mesh.num_vertices,)
         assert correspondence_rate(mesh, result.map, ground_truth=gt).rate > 0.95
 
+    def test_the_input_s_boundary(self, blob, monkeypatch):
+        """The copy's own small holes are no holes of a closed input: step 9's limit is the closed meshes' (and step 10 off)."""
+        from torchsym.mesh.intrinsic import solver
+
+        inner = []
+        real = solver.intrinsic_symmetry
+
+        def spy(mesh, settings=None, **kwargs):
+            inner.append(settings)
+            return real(mesh, settings, **kwargs)
+
+        monkeypatch.setattr(solver, "intrinsic_symmetry", spy)
+        mesh, _ = blob
+        real(mesh, coarse={"max_vertices": 600, "n_vertices": 400}, select={"max_distortion": 0.2})
+        assert inner[0].select.max_distortion_open == inner[0].select.max_distortion == 0.2
+        assert not inner[0].extrinsic.enabled
+
     def test_small_mesh_untouched(self, blob, solved):
         mesh, _ = blob
         result, _, _ = solved

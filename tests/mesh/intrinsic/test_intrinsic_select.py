@@ -27,7 +27,7 @@ def test_intrinsic_symmetry_keeps_the_thesis_map_on_a_nearly_ambiguous_shape(blo
         return real(table, limit)
 
     monkeypatch.setattr(select, "rank_choice", spy)
-    monkeypatch.setattr(select, "reflection_choice", lambda *a: None)  # the ranking alone
+    monkeypatch.setattr(select, "reflection_choice", lambda *a: (None, 0.0))  # the ranking alone
     on = intrinsic_symmetry(bent, hypotheses={"sign_basis": 0})
     pairs, orient = tables[0][0], tables[0][-1]  # rows: pairs, (hks_pairs,) orientation
     assert np.isfinite(orient).all()

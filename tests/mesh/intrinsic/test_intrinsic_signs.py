@@ -19,12 +19,12 @@ def test_cardinality_and_values(monkeypatch, blob):
     seen = {}
     original = hypotheses.sign_basis_candidates
 
-    def spy(ws, m):
-        seen["out"], seen["k"] = original(ws, m), ws.plan.n_eigen
+    def spy(ws, m, pairs):
+        seen["out"], seen["k"] = original(ws, m, pairs), ws.plan.n_eigen
         return seen["out"]
 
     monkeypatch.setattr(solver, "sign_basis_candidates", spy)
-    intrinsic_symmetry(blob[0], hypotheses={"sign_basis": 4})
+    intrinsic_symmetry(blob[0], hypotheses={"sign_basis": 4, "sign_basis_below": 2.0})  # always added
     out, k = seen["out"], seen["k"]
     assert len(out) == 2**3 - 1
     diagonals = {tuple(np.diag(c.fmap)) for c in out}
@@ -34,6 +34,25 @@ def test_cardinality_and_values(monkeypatch, blob):
         assert c.name == "signs" and c.fmap.shape == (k, k) and d[0] == 1.0 and (d[4:] == 1.0).all()
         assert (d[1:4] < 0).any()  # never the identity
         assert c.query.shape[1] == 4 and np.allclose(c.target, c.query * d[:4])
+
+
+def test_only_where_the_score_is_low(monkeypatch, blob):
+    """The sign hypotheses are added only when no other hypothesis passes step 9 as a reflection
+    scoring ``hypotheses.sign_basis_below``; the blob's mirror does."""
+    from torchsym.mesh.intrinsic import solver
+
+    calls = []
+    original = solver.sign_basis_candidates
+
+    def spy(ws, m, pairs):
+        calls.append(m)
+        return original(ws, m, pairs)
+
+    monkeypatch.setattr(solver, "sign_basis_candidates", spy)
+    skipped = intrinsic_symmetry(blob[0])
+    assert not calls and skipped.score >= 0.8
+    always = intrinsic_symmetry(blob[0], hypotheses={"sign_basis_below": 2.0})
+    assert calls == [4] and torch.equal(always.map, skipped.map)
 
 
 def test_exception(blob):

@@ -9,7 +9,6 @@ vertices' mirror plane.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import numpy as np
@@ -24,7 +23,7 @@ from torchsym.mesh.fmaps import consistency, map_consistency, pointwise_to_funct
 from torchsym.mesh.geodesic import geodesic_distances
 from torchsym.mesh.intrinsic.sample import sign_sample
 from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
-from torchsym.mesh.intrinsic.workspace import Workspace
+from torchsym.mesh.intrinsic.workspace import Candidate, Workspace
 from torchsym.mesh.nearest import Nearest, kdtree
 from torchsym.mesh.orientation import orientation_reversing_map
 from torchsym.mesh.pairs import eigenfunction_signs, symmetric_pairs
@@ -32,7 +31,6 @@ from torchsym.pointcloud.reflection_plane import detect_reflection_plane
 
 __all__ = [
     "HYPOTHESIS_TEXT",
-    "Candidate",
     "extrinsic_candidate",
     "first_image",
     "orientation_candidate",
@@ -50,32 +48,6 @@ HYPOTHESIS_TEXT = {
     "signs": "signs of the first eigenfunctions (hypotheses.sign_basis)",
     "extrinsic": "extrinsic reflection plane of the vertices",
 }
-
-
-@dataclasses.dataclass
-class Candidate:
-    """One hypothesis: its map sends vertex ``i`` to the row of ``target`` nearest ``query[i]``.
-
-    Attributes:
-        name: ``"pairs"``, ``"hks_pairs"``, ``"orientation"`` or ``"extrinsic"``.
-        pairs: ``(P, 2)`` its sparse pairs. fmap: ``(k, k)`` its ``C``. rotation: ``(k, k)`` ``R``.
-        converged: the correction converged. target, query: ``(V, m)`` rows of the map's search.
-        usable: worth testing (not the identity). notes: its notes.
-        refined: ``C`` of its ZoomOut refinement in step 9 (None: not refined).
-        start: its map on step 9's sample ``(S,)`` (None: a duplicate or unusable).
-    """
-
-    name: str
-    pairs: np.ndarray
-    fmap: np.ndarray
-    rotation: np.ndarray
-    converged: bool
-    target: np.ndarray
-    query: np.ndarray
-    usable: bool
-    notes: list[str]
-    refined: np.ndarray | None = None
-    start: np.ndarray | None = None
 
 
 def first_image(ws: Workspace, cand: Candidate) -> np.ndarray:
@@ -150,11 +122,11 @@ def sign_hypotheses(
     return best, base, best_q
 
 
-def _pairing_candidate(
-    ws: Workspace, pairs: np.ndarray, cand_notes: list[str], sign_draw, weight: float, timings: dict[str, float]
-) -> Candidate:
-    """Steps 5-7 for one pairing: signs, correction, and the map's rows."""
+def _pairing_candidate(ws: Workspace, pairs: np.ndarray, cand_notes: list[str], sign_draw, weight: float) -> tuple[Candidate, dict[str, float]]:
+    """Steps 5-7 for one pairing: signs, correction, and the map's rows; and the seconds of each."""
     s, evecs, evals = ws.settings, ws.evecs, ws.evals
+    seconds = {}
+    cand_notes = list(cand_notes)
     tic = time.perf_counter()
     signs, confidence = eigenfunction_signs(
         evecs, ws.v, ws.graph, pairs, cross_pairs=s.signs.cross_pairs, min_confidence=s.signs.min_confidence
@@ -162,7 +134,7 @@ def _pairing_candidate(
     signs[0] = 1.0  # the constant eigenfunction is even
     if not pairs.shape[0]:
         signs[:] = 1.0  # no evidence: C = I, whose map is the identity
-    timings["signs"], tic = timings["signs"] + time.perf_counter() - tic, time.perf_counter()
+    seconds["signs"], tic = time.perf_counter() - tic, time.perf_counter()
 
     rotation = np.eye(ws.plan.n_eigen)
     converged = True
@@ -173,7 +145,7 @@ def _pairing_candidate(
     if s.correction.enabled and pairs.shape[0]:
         res = correct_eigenfunctions(evals / evals[-1], fb_sparse, gb_sparse, signs, mu=s.correction.mu, max_iter=s.correction.max_iters)
         rotation, converged = res.rotation.numpy(), converged and res.converged
-    timings["correction"], tic = timings["correction"] + time.perf_counter() - tic, time.perf_counter()
+    seconds["correction"], tic = time.perf_counter() - tic, time.perf_counter()
 
     emb = evecs @ rotation  # (V', k)
     if sign_draw is not None:
@@ -186,37 +158,40 @@ def _pairing_candidate(
     # a map without an odd eigenfunction is the identity, which every test scores as perfect
     usable = bool(pairs.shape[0]) and bool((signs < 0).any())
     name = "pairs" if weight == s.pairs.spectral_weight else "hks_pairs"
-    cand = Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, cand_notes)
-    timings["map"] += time.perf_counter() - tic
-    return cand
+    cand = Candidate(name, pairs, np.diag(signs), rotation, converged, emb[:, use] * signs[use], emb[:, use], usable, tuple(cand_notes))
+    seconds["map"] = time.perf_counter() - tic
+    return cand, seconds
 
 
 def pairing_candidates(
-    ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list, timings: dict[str, float]
-) -> tuple[list[Candidate], list[np.ndarray]]:
-    """Steps 5-7 for each pairing, and each map on step 9's sample ``(S,)``."""
-    candidates = [
-        _pairing_candidate(ws, pairs, cand_notes, sign_draw, weight, timings)
-        for pairs, cand_notes, sign_draw, weight in zip(pair_sets, pair_notes, sign_draws, ws.plan.weights)
-    ]
+    ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list
+) -> tuple[list[Candidate], list[np.ndarray], dict[str, float]]:
+    """Steps 5-7 for each pairing, each map on step 9's sample ``(S,)``, and the seconds of steps 5-7 and of the maps."""
+    seconds = {"signs": 0.0, "correction": 0.0, "map": 0.0}
+    candidates = []
+    for pairs, cand_notes, sign_draw, weight in zip(pair_sets, pair_notes, sign_draws, ws.plan.weights):
+        cand, spent = _pairing_candidate(ws, pairs, cand_notes, sign_draw, weight)
+        candidates.append(cand)
+        for key, value in spent.items():
+            seconds[key] += value
     tic = time.perf_counter()
     images = [first_image(ws, cand) for cand in candidates]
-    timings["select"] += time.perf_counter() - tic
-    return candidates, images
+    seconds["select"] = time.perf_counter() - tic
+    return candidates, images, seconds
 
 
 def orientation_candidate(ws: Workspace) -> tuple[Candidate, float]:
     """Step 8: the orientation-reversing functional map fitted to the dense HKS
     (:func:`~torchsym.mesh.orientation.orientation_reversing_map`), and the seconds taken.
-    Its pairs are set to the thesis's once those are known."""
+    It has no pairs of its own (the solver gives it the thesis's once those are known)."""
     tic = time.perf_counter()
     fmap = orientation_reversing_map(ws.v, ws.f, ws.evals, ws.evecs, ws.area, ws.dense_desc)  # (k, k)
     seconds = time.perf_counter() - tic
-    cand = Candidate("orientation", np.zeros((0, 2), np.int64), fmap, np.eye(ws.plan.n_eigen), True, ws.evecs @ fmap.T, ws.evecs, True, [])
+    cand = Candidate("orientation", np.zeros((0, 2), np.int64), fmap, np.eye(ws.plan.n_eigen), True, ws.evecs @ fmap.T, ws.evecs, True)
     return cand, seconds
 
 
-def sign_basis_candidates(ws: Workspace, m: int) -> list[Candidate]:
+def sign_basis_candidates(ws: Workspace, m: int, pairs: np.ndarray) -> list[Candidate]:
     """Step 8's second extension: ``C = diag(1, s)`` in the first ``m`` eigenfunctions, one
     hypothesis per sign vector ``s`` in ``{-1, 1}^(m - 1)`` but all ``+1``.
 
@@ -224,7 +199,7 @@ def sign_basis_candidates(ws: Workspace, m: int) -> list[Candidate]:
     among the ``2^(m-1) - 1`` hypotheses is the symmetry's ``C`` in the smallest basis
     whenever the first ``m`` eigenvalues are simple; it needs no feature point, which is
     what the thesis's pairs miss on meshes whose HKS maxima are few or ambiguous. Each
-    ``fmap`` is ``(k, k)`` with ``+1`` past the first ``m``.
+    ``fmap`` is ``(k, k)`` with ``+1`` past the first ``m``; ``pairs (P, 2)``: the thesis's, for the result.
     """
     k = ws.plan.n_eigen
     m = min(m, k)
@@ -233,7 +208,7 @@ def sign_basis_candidates(ws: Workspace, m: int) -> list[Candidate]:
     for code in range(1, 2 ** (m - 1)):
         signs = np.ones(k)
         signs[1:m] = [-1.0 if (code >> b) & 1 else 1.0 for b in range(m - 1)]
-        out.append(Candidate("signs", np.zeros((0, 2), np.int64), np.diag(signs), np.eye(k), True, query * signs[:m], query, True, []))
+        out.append(Candidate("signs", pairs, np.diag(signs), np.eye(k), True, query * signs[:m], query, True))
     return out
 
 
@@ -261,6 +236,6 @@ def extrinsic_candidate(
     mirrored = v - 2.0 * (v @ nrm + off)[:, None] * nrm  # (V, 3)
     vmap = kdtree(v).query(mirrored, k=1, workers=thread_budget())[1].astype(np.int64)
     cand = Candidate(
-        "extrinsic", pairs, pointwise_to_functional(evecs, area, vmap), np.eye(evecs.shape[1]), True, v, mirrored, True, []
+        "extrinsic", pairs, pointwise_to_functional(evecs, area, vmap), np.eye(evecs.shape[1]), True, v, mirrored, True
     )
     return cand, float(plane.score)

@@ -8,7 +8,7 @@ import numpy as np
 
 from torchsym.mesh.geodesic import geodesic_distances
 
-__all__ = ["GeodesicProbe", "map_score"]
+__all__ = ["GeodesicProbe", "map_score", "reflection_score"]
 
 
 class GeodesicProbe:
@@ -51,6 +51,12 @@ class GeodesicProbe:
         return float(np.mean(moved < self.radius))
 
 
+def reflection_score(distortion: float, reversed_share: float, scale: float) -> float:
+    """How well a map passes as an intrinsic reflection, in [0, 1]: ``(1 - distortion / scale)_+``
+    times the share of sampled vertices around which it reverses the orientation."""
+    return float(min(1.0, max(0.0, 1.0 - distortion / scale) * reversed_share))
+
+
 def map_score(ws, vertex_map: np.ndarray) -> float:
     """The score in [0, 1] of a map ``(V,)`` (-1 allowed off the sample's 2-rings) on the workspace ``ws``
     of :func:`~torchsym.mesh.intrinsic.intrinsic_symmetry`: ``(1 - d / select.score_distortion)_+``
@@ -60,7 +66,5 @@ def map_score(ws, vertex_map: np.ndarray) -> float:
     image = vertex_map[ws.rows]
     if (image < 0).any():
         return 0.0
-    distortion = ws.probe.distortion(image)
-    fit = max(0.0, 1.0 - distortion / ws.settings.select.score_distortion)
     agree = ws.reversed_share(vertex_map) if ws.orient is not None else 1.0 - ws.probe.near_self(image)
-    return float(min(1.0, fit * agree))
+    return reflection_score(ws.probe.distortion(image), agree, ws.settings.select.score_distortion)

@@ -8,8 +8,7 @@ import time
 import numpy as np
 
 from torchsym.core.parallel import thread_budget
-from torchsym.mesh.intrinsic.hypotheses import Candidate
-from torchsym.mesh.intrinsic.workspace import Workspace
+from torchsym.mesh.intrinsic.workspace import Candidate, Workspace
 from torchsym.mesh.nearest import kdtree
 
 __all__ = ["MapState", "finish_map", "refined_map", "thesis_map"]
@@ -47,23 +46,22 @@ def thesis_map(chosen: Candidate, eps: float) -> tuple[np.ndarray, float]:
     return dense_tree.query(chosen.query, k=1, eps=eps, workers=thread_budget())[1].astype(np.int64), time.perf_counter() - tic  # (V',)
 
 
-def refined_map(ws: Workspace, chosen: Candidate, timings: dict[str, float]) -> MapState:
+def refined_map(ws: Workspace, chosen: Candidate) -> tuple[MapState, dict[str, float]]:
     """Step 11: the map of the chosen hypothesis's last ZoomOut ``C`` on the sample and its
-    2-rings (the rest when no later step replaces it, :func:`finish_map`); or, unrefined, the thesis's map."""
+    2-rings (the rest when no later step replaces it, :func:`finish_map`); or, unrefined, the
+    thesis's map. And the seconds taken, as ``"refine"`` (with refinement on) or ``"map"``."""
     tic = time.perf_counter()
-    if ws.plan.refine_iters:
-        timings["refine"] = 0.0
+    seconds = {"refine": 0.0} if ws.plan.refine_iters else {}
     if ws.plan.refine_iters and chosen.refined is not None:
         full = chosen.refined  # (k_r, k_r), fitted on the sample
         read = np.union1d(ws.rows, ws.two_ring[ws.rows].indices)  # (U,)
         rest = np.setdiff1d(np.arange(ws.n), read)
         vmap = np.full(ws.n, -1, dtype=np.int64)
         vmap[read] = ws.search.map_every_vertex(full, read)
-        timings["refine"] = time.perf_counter() - tic
-        return MapState(vmap, full, step11=vmap, step11_fmap=full, rest=rest)
-    coarse_map, t_map = thesis_map(chosen, 0.0)
-    timings["map"] += t_map
-    return MapState(coarse_map, np.zeros((0, 0)), coarse=coarse_map)
+        seconds["refine"] = time.perf_counter() - tic
+        return MapState(vmap, full, step11=vmap, step11_fmap=full, rest=rest), seconds
+    coarse_map, seconds["map"] = thesis_map(chosen, 0.0)
+    return MapState(coarse_map, np.zeros((0, 0)), coarse=coarse_map), seconds
 
 
 def finish_map(ws: Workspace, state: MapState) -> tuple[np.ndarray, float]:

@@ -13,9 +13,8 @@ import scipy.linalg
 
 from torchsym.core import parallel
 from torchsym.mesh import fmaps
-from torchsym.mesh.intrinsic.hypotheses import Candidate
 from torchsym.mesh.intrinsic.refine import MapState
-from torchsym.mesh.intrinsic.workspace import Workspace
+from torchsym.mesh.intrinsic.workspace import Candidate, Workspace
 from torchsym.mesh.orientation import anticommutation_penalty, orientation_operators, reduce_descriptors
 
 __all__ = ["oriented_fits", "reorient"]

@@ -74,6 +74,10 @@ class Hypotheses(Settings):
         4, "also start from C = diag(1, s) in this many first eigenfunctions, every sign vector s but all +1 (0: off)",
         low=0, high=8,
     )
+    sign_basis_below: float = setting(
+        0.8, "the sign hypotheses are added only when no other hypothesis passes step 9 as a reflection of at least "
+        "this score ((1 - distortion / select.score_distortion) x reversed share; above 1: always added)", low=0.0,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,7 +107,7 @@ class Select(Settings):
         0.14, "largest sampled geodesic distortion for a hypothesis to replace the thesis's pairs (closed meshes)",
         low=0.0, low_open=True,
     )
-    max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges", low=0.0, low_open=True)
+    max_distortion_open: float = setting(0.12, "max_distortion for meshes with boundary edges (the input's, on a coarse copy)", low=0.0, low_open=True)
     score_distortion: float = setting(
         0.25, "the returned map's sampled geodesic distortion at which its score reaches 0", low=0.0, low_open=True
     )

@@ -22,7 +22,6 @@ from torchsym.geometry.mesh import Mesh
 from torchsym.mesh.intrinsic.coarsen import carry_map, coarse_copy
 from torchsym.mesh.intrinsic.hypotheses import (
     HYPOTHESIS_TEXT,
-    Candidate,
     first_image,
     orientation_candidate,
     pair_features,
@@ -37,10 +36,19 @@ from torchsym.mesh.intrinsic.refine import finish_map, refined_map, thesis_map
 from torchsym.mesh.intrinsic.reorient import reorient
 from torchsym.mesh.intrinsic.result import Deferred, IntrinsicSymmetryResult
 from torchsym.mesh.intrinsic.sample import draw_sample, sign_sample
-from torchsym.mesh.intrinsic.select import choose, is_weak, try_extrinsic
+from torchsym.mesh.intrinsic.select import choose, is_weak, screen_and_refine, try_extrinsic
 from torchsym.mesh.intrinsic.settings import IntrinsicSymmetrySettings
 from torchsym.mesh.intrinsic.spectrum import Spectrum, compute_spectrum, feature_points
-from torchsym.mesh.intrinsic.workspace import Plan, Surface, Workspace, plan_bases, prepare_surface, sample_notes
+from torchsym.mesh.intrinsic.workspace import (
+    Candidate,
+    Plan,
+    Stopwatch,
+    Surface,
+    Workspace,
+    plan_bases,
+    prepare_surface,
+    sample_notes,
+)
 from torchsym.mesh.nearest import SampledSearch
 from torchsym.mesh.operators import edge_face_counts
 from torchsym.mesh.validate import validate_mesh
@@ -68,10 +76,11 @@ def intrinsic_symmetry(
     5. Signs of the eigenfunctions from geodesics between pairs, ``C = diag(s)`` (Sec. 6.2.5).
     6. The correction ``R`` on SO(k) of Eq. 6.4 (Sec. 6.2.6).
     7. The dense map (Sec. 6.2.7), trying both signs of the least-confident eigenfunctions.
-    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``), and
-       ``C = diag(1, s)`` in the first eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``).
+    8. The orientation-reversing functional map of the dense HKS (``hypotheses.orientation``).
     9. Choice by ZoomOut on a vertex sample: the least-distorting hypothesis that reverses the
-       orientation (a reflection), else the tests of an isometric involution.
+       orientation (a reflection), else the tests of an isometric involution. Where no reflection
+       scores ``hypotheses.sign_basis_below``, step 8 adds ``C = diag(1, s)`` in the first
+       eigenfunctions for every sign vector ``s`` (``hypotheses.sign_basis``) and step 9 chooses again.
     10. The vertices' mirror plane when the chosen map is weak and the mesh has holes (``extrinsic``).
     11. ZoomOut refinement to ``refine.n_eigen`` eigenfunctions (``refine``).
     12. Orientation check, ZoomOut with an orientation penalty (``refine.orientation_weight``).
@@ -102,58 +111,46 @@ def intrinsic_symmetry(
     gen = generator if generator is not None else make_generator(settings.seed)
     if settings.coarse.enabled and isinstance(mesh, Mesh) and mesh.num_vertices > settings.coarse.max_vertices:
         return _solve_on_copy(mesh, settings, gen)  # steps 1-14 on a decimated copy
-    timings: dict[str, float] = {}
-    notes: list[str] = []
-    t_start = tic = time.perf_counter()
+    watch, notes = Stopwatch(), []
+    t_start = time.perf_counter()
 
-    surface = prepare_surface(mesh, settings, notes)  # step 1
-    timings["validate"] = time.perf_counter() - tic
+    with watch("validate"):
+        surface = prepare_surface(mesh, settings, notes)  # step 1
     plan = plan_bases(surface.n, settings, notes)
     spectrum = compute_spectrum(surface.v, surface.f, plan, settings, gen)  # step 2
-    timings["eigen"] = spectrum.t_eigen
+    watch.add("eigen", spectrum.t_eigen)
     features = feature_points(spectrum, settings)  # step 3
-    timings["features"] = spectrum.t_topology + features.seconds
-
-    tic = time.perf_counter()
-    pair_sets, pair_notes = pair_features(spectrum.graph, features.points, features.desc, spectrum.evecs, plan.weights, settings)  # step 4
-    sign_draws, seed = _draw_seeds(surface, spectrum, pair_sets, settings, gen)
-    for key in ("signs", "correction", "map"):
-        timings[key] = 0.0
-    timings["pairs"], tic = time.perf_counter() - tic, time.perf_counter()
+    watch.add("features", spectrum.t_topology + features.seconds)
+    with watch("pairs"):
+        pair_sets, pair_notes = pair_features(spectrum.graph, features.points, features.desc, spectrum.evecs, plan.weights, settings)  # step 4
+        sign_draws, seed = _draw_seeds(surface, spectrum, pair_sets, settings, gen)
 
     notes.extend(sample_notes(plan, surface.n, settings))
-    ws, t_sample = _workspace(surface, spectrum, features.dense_desc, plan, settings, seed)
-    timings["select"] = t_sample + time.perf_counter() - tic
-    candidates, images = _hypotheses(ws, pair_sets, pair_notes, sign_draws, timings)  # steps 5-8
+    with watch("select"):
+        ws, t_sample = _workspace(surface, spectrum, features.dense_desc, plan, settings, seed)
+    watch.add("select", t_sample)
+    ws, candidates, images, seconds = _hypotheses(ws, pair_sets, pair_notes, sign_draws)  # steps 5-8
+    watch.add_all(seconds)
 
-    tic = time.perf_counter()
-    seen: list[np.ndarray] = []
-    table, best = choose(ws, candidates, images, seen)  # step 9
-    timings["select"] += time.perf_counter() - tic
+    with watch("select"):
+        candidates, table, seen = screen_and_refine(ws, candidates, images, [])  # step 9
+        best, confidence = choose(ws, candidates, table)
+        if _more_hypotheses(settings, confidence):  # step 8's sign hypotheses, then step 9 again
+            candidates, table, seen = _with_sign_hypotheses(ws, candidates, table, seen)
+            best, confidence = choose(ws, candidates, table)
     extrinsic_note = None
     holed = surface.holes_closed > 0 or spectrum.has_boundary
     if settings.extrinsic.enabled and holed and is_weak(table[best], settings.extrinsic.weak_defect):
-        tic = time.perf_counter()
-        table, best, extrinsic_note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen, notes)  # step 10
-        timings["extrinsic"] = time.perf_counter() - tic
-    chosen = candidates[best]
-    _choice_notes(candidates, table, best, extrinsic_note, notes)
-
-    state = refined_map(ws, chosen, timings)  # step 11
-    state, step_notes, seconds = reorient(ws, chosen, candidates, state)  # step 12
-    notes.extend(step_notes)
-    if seconds is not None:
-        timings["orientation_check"] = seconds
-    improvable = chosen.refined is not None or state.rescued
-    if plan.polish and improvable:
-        state, step_notes, timings["polish"] = polish(ws, state)  # step 13
-        notes.extend(step_notes)
-    if plan.realign and state.full.shape[0] and improvable:
-        if ws.wound:
-            state, step_notes, timings["realign"] = realign(ws, state)  # step 14
-            notes.extend(step_notes)
+        with watch("extrinsic"):
+            candidates, table, best, taken, note = try_extrinsic(ws, candidates, table, best, seen, surface.patch_share, gen)  # step 10
+        if taken:
+            extrinsic_note = note
         else:
-            notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
+            notes.append(note)
+    chosen = candidates[best]
+    notes.extend(_choice_notes(candidates, table, best, extrinsic_note))
+
+    state = _refine_chosen(ws, chosen, candidates, watch, notes)  # steps 11-14
     if not np.isfinite(table[best]).all() and chosen.usable and not state.rescued:
         notes.append(
             "no hypothesis passed the tests of an isometric involution (each left most of the shape "
@@ -162,16 +159,40 @@ def intrinsic_symmetry(
         )
     vmap, seconds = finish_map(ws, state)
     if state.step11 is not None:
-        timings["refine"] += seconds
+        watch.add("refine", seconds)
     state = dataclasses.replace(state, vmap=vmap)
-    score = map_score(ws, state.vmap)
+    score = map_score(ws, state.vmap)  # step 15
     if score < settings.select.weak_score:
         notes.append(
             f"the intrinsic symmetry found is weak (score {score:.2f} < select.weak_score {settings.select.weak_score:g}): "
             "the mesh may have no intrinsic reflection symmetry, or the map may be wrong"
         )
-    timings["total"] = time.perf_counter() - t_start
-    return _result(surface, spectrum, features.points, chosen, state, score, settings.refine.before_refine_eps, timings, notes)
+    watch.add("total", time.perf_counter() - t_start)
+    return _result(surface, spectrum, features.points, chosen, state, score, settings.refine.before_refine_eps, watch.as_dict(), notes)
+
+
+def _refine_chosen(ws: Workspace, chosen: Candidate, candidates: list[Candidate], watch: Stopwatch, notes: list[str]):
+    """Steps 11-14 from the chosen hypothesis: the map state they hand on (each step's seconds to ``watch``, notes to ``notes``)."""
+    state, seconds = refined_map(ws, chosen)  # step 11
+    watch.add_all(seconds)
+    state, step_notes, seconds = reorient(ws, chosen, candidates, state)  # step 12
+    notes.extend(step_notes)
+    if seconds is not None:
+        watch.add("orientation_check", seconds)
+    improvable = chosen.refined is not None or state.rescued
+    plan = ws.plan
+    if plan.polish and improvable:
+        state, step_notes, seconds = polish(ws, state)  # step 13
+        notes.extend(step_notes)
+        watch.add("polish", seconds)
+    if plan.realign and state.full.shape[0] and improvable:
+        if ws.wound:
+            state, step_notes, seconds = realign(ws, state)  # step 14
+            notes.extend(step_notes)
+            watch.add("realign", seconds)
+        else:
+            notes.append("realignment (step 14) skipped: the faces are not consistently wound, so the orientation is undefined")
+    return state
 
 
 def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.Generator) -> IntrinsicSymmetryResult:
@@ -181,12 +202,14 @@ def _solve_on_copy(mesh: Mesh, settings: IntrinsicSymmetrySettings, gen: torch.G
     v = checked.mesh.vertices.detach().cpu().double().numpy()  # (V', 3)
     f = checked.mesh.faces.detach().cpu().numpy()  # (F', 3)
     copy = coarse_copy(v, f, settings.coarse.n_vertices, np.random.default_rng(draw_seed(gen)))
-    # the copy's own small holes (where regions meet irregularly) are no holes of the input: step 10 follows the input
+    # the copy's own small holes (where regions meet irregularly) are no holes of the input: step 10
+    # and step 9's limit on the distortion follow the input
     holed = bool((edge_face_counts(f)[1] == 1).any())
+    select = settings.select if holed else dataclasses.replace(settings.select, max_distortion_open=settings.select.max_distortion)
     inner = intrinsic_symmetry(
         Mesh(torch.from_numpy(copy.vertices), torch.from_numpy(copy.faces)),
         dataclasses.replace(
-            settings, coarse=dataclasses.replace(settings.coarse, enabled=False),
+            settings, coarse=dataclasses.replace(settings.coarse, enabled=False), select=select,
             extrinsic=dataclasses.replace(settings.extrinsic, enabled=settings.extrinsic.enabled and holed),
         ),
         generator=gen,
@@ -265,36 +288,44 @@ def _orientation_branch(ws: Workspace) -> tuple:
     return cand, t_fmap, probe, t_probe + time.perf_counter() - tic, image
 
 
-def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list, timings: dict[str, float]) -> tuple:
-    """Steps 5-8: the pairings' hypotheses beside the orientation hypothesis (with step 9's probe), on two threads."""
-    pairings = partial(pairing_candidates, ws, pair_sets, pair_notes, sign_draws, timings)
+def _hypotheses(ws: Workspace, pair_sets: list, pair_notes: list, sign_draws: list) -> tuple:
+    """Steps 5-8: the pairings' hypotheses beside the orientation hypothesis (with step 9's probe), on two
+    threads. Returns the workspace with its probe, the hypotheses, their maps on the sample ``(S,)`` and
+    the seconds per step."""
+    pairings = partial(pairing_candidates, ws, pair_sets, pair_notes, sign_draws)
     if ws.settings.hypotheses.orientation:
-        (candidates, images), (cand, timings["orientation"], probe, t_probe, image) = parallel.run_branches(
+        (candidates, images, seconds), (cand, t_orientation, probe, t_probe, image) = parallel.run_branches(
             [pairings, partial(_orientation_branch, ws)]
         )
-        cand.pairs = candidates[0].pairs
-        candidates.append(cand)
-        images.append(image)
+        candidates = [*candidates, dataclasses.replace(cand, pairs=candidates[0].pairs)]
+        images = [*images, image]
+        seconds["orientation"] = t_orientation
     else:
-        (candidates, images), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
-    ws.probe = probe
-    timings["select"] += t_probe
-    if ws.settings.hypotheses.sign_basis >= 2:
-        tic = time.perf_counter()
-        signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis)
-        for cand in signed:
-            cand.pairs = candidates[0].pairs
-        candidates.extend(signed)
-        images.extend(sign_basis_image(ws, cand) for cand in signed)
-        timings["select"] += time.perf_counter() - tic
-    return candidates, images
+        (candidates, images, seconds), (probe, t_probe) = parallel.run_branches([pairings, partial(_probe_and_searches, ws)])
+    seconds["select"] += t_probe
+    return dataclasses.replace(ws, probe=probe), candidates, images, seconds
 
 
-def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, extrinsic_note: str | None, notes: list[str]) -> None:
+def _more_hypotheses(settings: IntrinsicSymmetrySettings, confidence: float | None) -> bool:
+    """Whether step 8's sign hypotheses are added: on, and no reflection of at least ``hypotheses.sign_basis_below`` found."""
+    hyp = settings.hypotheses
+    return hyp.sign_basis >= 2 and (confidence is None or confidence < hyp.sign_basis_below)
+
+
+def _with_sign_hypotheses(ws: Workspace, candidates: list[Candidate], table: np.ndarray, seen: list) -> tuple:
+    """Step 8's sign hypotheses, tested as in step 9 after ``candidates`` (tests ``table``); all of them and their tests."""
+    signed = sign_basis_candidates(ws, ws.settings.hypotheses.sign_basis, candidates[0].pairs)
+    images = [sign_basis_image(ws, cand) for cand in signed]
+    more, more_table, seen = screen_and_refine(ws, signed, images, seen)
+    return [*candidates, *more], np.vstack([table, more_table]), seen
+
+
+def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, extrinsic_note: str | None) -> list[str]:
+    """The chosen hypothesis's notes and the note saying why it is not the thesis's."""
     chosen = candidates[best]
     for cand, row in zip(candidates, table):
         logger.debug("hypothesis %s: defects %s", cand.name, np.round(row, 4))
-    notes.extend(chosen.notes)
+    notes = list(chosen.notes)
     if extrinsic_note is not None:
         notes.append(extrinsic_note)
     elif best != 0:
@@ -303,6 +334,7 @@ def _choice_notes(candidates: list[Candidate], table: np.ndarray, best: int, ext
             f"(defects {np.array2string(table[best], precision=3)} against {np.array2string(table[0], precision=3)} "
             f"for the thesis's pairs)"
         )
+    return notes
 
 
 def _deferred_thesis_map(checked, chosen: Candidate, eps: float) -> torch.Tensor:

@@ -1,10 +1,14 @@
 """What the steps of the method hand on: the prepared surface, the plan of bases and samples,
-and the workspace that steps 5-14 share (all passed explicitly)."""
+the workspace that steps 5-14 read, the hypotheses, and the stopwatch of the steps (all passed
+explicitly; every record is frozen, a step returns a new one)."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -16,7 +20,7 @@ from torchsym.mesh.orientation import OrientationTest
 from torchsym.mesh.repair import close_holes
 from torchsym.mesh.validate import ValidatedMesh, validate_mesh
 
-__all__ = ["Plan", "Surface", "Workspace", "plan_bases", "prepare_surface"]
+__all__ = ["Candidate", "Plan", "Stopwatch", "Surface", "Workspace", "plan_bases", "prepare_surface"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,9 +77,11 @@ class Plan:
         return 3 if self.refine_k > self.n_eigen else 2
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class Workspace:
-    """What steps 5-14 share: the surface, its spectrum, step 9's sample and its searches."""
+    """What steps 5-14 read: the surface, its spectrum, step 9's sample, its searches and
+    (once built, beside step 8) its geodesic probe. The searches and the probe keep caches
+    that threads may share; nothing else changes after construction."""
 
     settings: IntrinsicSymmetrySettings
     plan: Plan
@@ -110,6 +116,60 @@ class Workspace:
     def reversed_share(self, vertex_map: np.ndarray) -> float:
         """Share of the sampled vertices around which ``vertex_map (V,)`` reverses the orientation."""
         return float(np.mean(self.orient(vertex_map) < 0))
+
+
+@dataclasses.dataclass(frozen=True)
+class Candidate:
+    """One hypothesis: its map sends vertex ``i`` to the row of ``target`` nearest ``query[i]``.
+
+    Steps 4-8 make it; step 9 returns a copy with ``start``, ``refined`` and its notes.
+
+    Attributes:
+        name: ``"pairs"``, ``"hks_pairs"``, ``"orientation"``, ``"signs"`` or ``"extrinsic"``.
+        pairs: ``(P, 2)`` its sparse pairs. fmap: ``(k, k)`` its ``C``. rotation: ``(k, k)`` ``R``.
+        converged: the correction converged. target, query: ``(V, m)`` rows of the map's search.
+        usable: worth testing (not the identity). notes: its notes.
+        refined: ``C`` of its ZoomOut refinement in step 9 (None: not refined).
+        start: its map on step 9's sample ``(S,)`` (None: a duplicate or unusable, or not yet screened).
+    """
+
+    name: str
+    pairs: np.ndarray
+    fmap: np.ndarray
+    rotation: np.ndarray
+    converged: bool
+    target: np.ndarray
+    query: np.ndarray
+    usable: bool
+    notes: tuple[str, ...] = ()
+    refined: np.ndarray | None = None
+    start: np.ndarray | None = None
+
+
+class Stopwatch:
+    """Seconds per step of one run: ``with watch("select"):`` adds the block's wall time to
+    ``"select"``; :meth:`add` adds seconds a branch on a thread measured on its own."""
+
+    def __init__(self) -> None:
+        self._seconds: dict[str, float] = {}
+
+    @contextmanager
+    def __call__(self, name: str) -> Iterator[None]:
+        tic = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.add(name, time.perf_counter() - tic)
+
+    def add(self, name: str, seconds: float) -> None:
+        self._seconds[name] = self._seconds.get(name, 0.0) + seconds
+
+    def add_all(self, seconds: dict[str, float]) -> None:
+        for name, value in seconds.items():
+            self.add(name, value)
+
+    def as_dict(self) -> dict[str, float]:
+        return dict(self._seconds)
 
 
 def prepare_surface(mesh, settings: IntrinsicSymmetrySettings, notes: list[str]) -> Surface:
