@@ -192,7 +192,9 @@ def _close(planes, axes, roto, scale, origin, settings: SymmetrySettings) -> Sym
     cands = [rotation_transforms(d, p, torch.tensor([2.0 * math.pi / n], dtype=d.dtype))[0, :3, :3] for d, p, n, *_ in axes]
     cands += [t[:3, :3] for t in roto]
     if refl_n.shape[0]:
-        cands += list(reflection_matrix(refl_n))
+        mats = reflection_matrix(refl_n)
+        cands += [mats[0] @ m for m in mats[1:]]  # the turns the best plane makes with the others
+        cands += list(mats)
     center = _fixed_point(planes, axes, scale, origin)
     kwargs = dict(continuous_axes=cont, axis_points=planes.axis_points, max_order=g.max_order, tol=g.tol)
     if not cands:

@@ -21,7 +21,7 @@ class RotationSettings(Settings):
         1.6, "accept a rotation whose images lie at most this far from the cloud", unit="x sampling distance", low=1.0
     )
     refine_ratio: float = setting(
-        4.0, "candidate axes whose best rotation lies within this are refined and tested", unit="x sampling distance",
+        12.0, "candidate axes whose best rotation lies within this are refined and tested", unit="x sampling distance",
         low=1.0,
     )
     relative_ratio: float = setting(
