@@ -167,3 +167,79 @@ class TestNoFalseRevolution:
 def test_every_point_twice_still_has_its_planes():
     pts = sample_surface(box_mesh((3.0, 2.0, 1.0)), 3000, generator=0).float()
     assert detect_reflection_planes(torch.cat([pts, pts])).n_planes == 3
+
+
+class TestBOP:
+    def test_models_folder_to_models_info_in_one_command(self, tmp_path):
+        from torchsym.io import write_mesh
+        from torchsym.pointcloud import read_models_info
+        from torchsym.pointcloud.reflection_planes.bop import group_from_bop
+        from torchsym.pointcloud.symmetry.bop_export import main
+
+        models = tmp_path / "models"
+        models.mkdir()
+        write_mesh(models / "obj_000001.ply", about_axis(PART, 3))
+        write_mesh(models / "obj_000002.ply", fan_mesh(4))
+        assert main([str(models), "--points", "8000"]) == 0
+        info = read_models_info(models / "models_info.json")
+        assert sorted(info) == [1, 2]
+        assert (tmp_path / "models" / "models_info_pictures" / "obj_000001.png").exists()
+        g1, g2 = group_from_bop(info[1]), group_from_bop(info[2])
+        assert g1.order == 3 and g1.orders.tolist() == [3]
+        assert g2.order == 8 and sorted(g2.orders.tolist()) == [2, 2, 2, 2, 4]
+        for e in info.values():
+            assert {"diameter", "min_x", "size_z"} <= set(e)
+
+    def test_export_refuses_a_missing_folder(self, tmp_path):
+        from torchsym.pointcloud.symmetry.bop_export import main
+
+        assert main([str(tmp_path / "nope")]) == 2
+
+    @pytest.mark.parametrize("entry", [
+        [1, 2], {"symmetries_discrete": "x"}, {"symmetries_discrete": [[1.0] * 15]}, {"symmetries_discrete": [["a"] * 16]},
+        {"symmetries_discrete": [[1, 0, 0, float("inf"), 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]]},
+        {"symmetries_discrete": [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1]]},  # a reflection
+        {"symmetries_discrete": [[2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]]},
+        {"symmetries_continuous": [{"axis": [0, 0, 0], "offset": [0, 0, 0]}]},
+        {"symmetries_continuous": [{"axis": [0, 0, 1]}]}, {"symmetries_continuous": [[0, 0, 1]]},
+        {"symmetries_continuous": [{"axis": [0, float("nan"), 1], "offset": [0, 0, 0]}]},
+    ])
+    def test_malformed_entries_are_typed(self, entry):
+        from torchsym.pointcloud.reflection_planes.bop import group_from_bop
+
+        with pytest.raises(InputValueError):
+            group_from_bop(entry)
+
+    def test_300_fold_entry_is_bounded_and_right(self):
+        import time
+
+        from torchsym.pointcloud.reflection_planes.bop import group_from_bop
+
+        a = 2 * math.pi / 300
+        flat = [math.cos(a), -math.sin(a), 0, 0, math.sin(a), math.cos(a), 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]
+        t0 = time.perf_counter()
+        g = group_from_bop({"symmetries_discrete": [flat]})
+        assert time.perf_counter() - t0 < 10.0
+        assert g.closed and g.orders.tolist() == [300]
+
+    def test_read_and_write_errors_are_typed(self, tmp_path):
+        from torchsym.errors import InputFileError
+        from torchsym.pointcloud import read_models_info, write_models_info
+
+        with pytest.raises(InputFileError):
+            read_models_info(tmp_path / "missing.json")
+        with pytest.raises(InputFileError):
+            read_models_info(tmp_path)
+        deep = tmp_path / "deep.json"
+        deep.write_text("[" * 100000 + "]" * 100000)
+        with pytest.raises(InputValueError):
+            read_models_info(deep)
+        with pytest.raises(InputValueError):
+            write_models_info(tmp_path / "m.json", {1: {"diameter": float("nan")}})
+        assert not (tmp_path / "m.json").exists()
+        with pytest.raises(InputFileError):
+            write_models_info(tmp_path / "no" / "m.json", {1: {"diameter": 1.0}})
+        with pytest.raises(InputFileError):
+            write_models_info(tmp_path, {1: {"diameter": 1.0}})
+        write_models_info(tmp_path / "m.json", {1: {"diameter": 1.0}})
+        assert read_models_info(tmp_path / "m.json") == {1: {"diameter": 1.0}}

@@ -219,7 +219,7 @@ def group_from_generators(
         n = len(m) + 1
         got = sorted(_signed_angle(lin[rot_idx[k]], d) for k in m)
         want = [2 * math.pi * k / n for k in range(1, n)]
-        if 2 * math.pi / n < 2 * step or max(abs(a - b) for a, b in zip(got, want)) > 0.1 * step:
+        if 2 * math.pi / n < step or max(abs(a - b) for a, b in zip(got, want)) > 0.1 * step:
             closed = False
     refl = [i for i in range(lin.shape[0]) if float(det[i]) < 0 and float(torch.trace(lin[i])) > 0.5]
     homog = _homogeneous(lin, center)
