@@ -602,6 +602,87 @@ def prop_detector_settings(name, data, seed):
     _solver_contract(fn, x, nested, seed)
 
 
+# ---------------------------------------------------------------- the symmetry group and BOP files (issue 59)
+
+ODD_NUMBERS = [0.05, 1e-3, 0.0, -1.0, math.nan, math.inf, 2.0, 1e30, True, "0.1", None]
+
+
+@given(st.integers(0, 4), st.sampled_from([1, 2, 3, 4]), st.sampled_from(ODD_NUMBERS), st.one_of(st.integers(-2, 400), st.sampled_from([2.5, 10**9, True, None])),
+       st.data())
+def prop_symmetry_group(p, d, tol, max_order, data):
+    from torchsym.pointcloud import symmetry_group
+
+    normals = data.draw(tensors((p, d), [torch.float32, torch.float64, torch.int64]))
+    res = type("R", (), {"normals": normals, "center": torch.zeros(3)})()
+    show(normals=normals, tol=tol, max_order=max_order)
+    before = snapshot(normals)
+    g = expect(lambda: symmetry_group(res, tol=tol, max_order=max_order))
+    unchanged(before, normals)
+    if g is not None:
+        all_finite(g)
+        assert g.order <= max_order
+
+
+def _bop_value(draw) -> Any:
+    return draw(st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-3, 3), st.text(max_size=3), st.none(),
+                          st.lists(st.floats(-2, 2), max_size=17), st.booleans()))
+
+
+@st.composite
+def bop_entries(draw) -> Any:
+    """A models_info.json entry: mostly well formed (rotations about z by 2 pi / n, a
+    translation), or with odd parts."""
+    if draw(st.integers(0, 9)) == 0:
+        return _bop_value(draw)
+    entry: dict[str, Any] = {}
+    disc = []
+    for _ in range(draw(st.integers(0, 3))):
+        n = draw(st.sampled_from([1, 2, 3, 4, 6, 12, 300, 7]))
+        a = 2 * math.pi / n
+        t = [math.cos(a), -math.sin(a), 0.0, draw(st.sampled_from([0.0, 1.5, math.inf, math.nan])),
+             math.sin(a), math.cos(a), 0.0, 0.0, 0.0, 0.0, draw(st.sampled_from([1.0, -1.0])), 0.0, 0.0, 0.0, 0.0, 1.0]
+        if draw(st.booleans()):
+            k = draw(st.integers(0, 15))
+            t[k] = _bop_value(draw)
+        disc.append(t if draw(st.integers(0, 5)) else t[: draw(st.integers(0, 16))])
+    if disc or draw(st.booleans()):
+        entry["symmetries_discrete"] = disc if draw(st.integers(0, 7)) else _bop_value(draw)
+    if draw(st.booleans()):
+        entry["symmetries_continuous"] = [
+            {"axis": draw(st.sampled_from([[0, 0, 1], [0, 0, 0], [1, math.nan, 0], [1, 0], "z"])), "offset": [0.0, 0.0, 0.0]}
+            if draw(st.integers(0, 4)) else _bop_value(draw)
+        ]
+    return entry
+
+
+@given(bop_entries(), st.sampled_from([0.05, 0.01, math.nan, 0.0]))
+def prop_group_from_bop(entry, tol):
+    from torchsym.pointcloud import group_from_bop
+
+    show(entry=entry, tol=tol)
+    g = expect(lambda: group_from_bop(entry, tol=tol))
+    if g is not None:
+        all_finite(g)
+        assert g.order <= 1000
+        for r in g.rotations:
+            assert float(torch.linalg.det(r[:3, :3])) > 0
+
+
+@given(st.dictionaries(st.one_of(st.integers(-2, 5), st.text(max_size=3)), bop_entries(), max_size=3), st.booleans())
+def prop_models_info_io(entries, to_folder):
+    from torchsym.pointcloud import read_models_info, write_models_info
+
+    show(entries=entries, to_folder=to_folder)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) if to_folder else Path(tmp) / "models_info.json"
+        out = expect(lambda: write_models_info(path, entries))
+        if out is not None:
+            text = out.read_text()
+            json.loads(text, parse_constant=lambda c: (_ for _ in ()).throw(AssertionError(f"bare {c} written")))
+            back = expect(lambda: read_models_info(out))
+            assert back is not None and sorted(back) == sorted(int(k) for k in entries)
+
+
 PROPERTIES = {
     "symmetry_distance": prop_symmetry_distance,
     "field_loss": prop_field_loss,
@@ -619,4 +700,7 @@ PROPERTIES = {
     "mask_metrics": prop_mask_metrics,
     "superpixel_metrics": prop_superpixel_metrics,
     "detector_settings": prop_detector_settings,
+    "symmetry_group": prop_symmetry_group,
+    "group_from_bop": prop_group_from_bop,
+    "models_info_io": prop_models_info_io,
 }

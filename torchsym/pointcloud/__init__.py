@@ -20,6 +20,7 @@ from torchsym.pointcloud.reflection_planes.bop import (
     write_models_info,
 )
 from torchsym.pointcloud.reflection_planes.group import SymmetryGroup, symmetry_group
+from torchsym.pointcloud.symmetry import SymmetryDetector, SymmetryResult, SymmetrySettings, detect_symmetry
 from torchsym.pointcloud.shapes import box_mesh, boxes_mesh, chair_mesh, cone_mesh, prism_mesh, table_mesh
 from torchsym.pointcloud.synthetic import (
     SymmetricCloud,
@@ -40,7 +41,10 @@ __all__ = [
     "ReflectionPlanesResult",
     "ReflectionPlanesSettings",
     "SymmetricCloud",
+    "SymmetryDetector",
     "SymmetryGroup",
+    "SymmetryResult",
+    "SymmetrySettings",
     "add_outliers",
     "bop_symmetries",
     "box_mesh",
@@ -49,6 +53,7 @@ __all__ = [
     "cone_mesh",
     "detect_reflection_plane",
     "detect_reflection_planes",
+    "detect_symmetry",
     "group_from_bop",
     "mirror_complete",
     "models_info_entry",

@@ -62,4 +62,4 @@ def _load_writers() -> None:
 
 
 #: writer modules, one per family of results
-_MODULES: tuple[str, ...] = ("image", "mesh", "multiview", "planes", "pointcloud", "pointset", "superpixels", "symmetry_map",)
+_MODULES: tuple[str, ...] = ("image", "mesh", "multiview", "planes", "pointcloud", "pointset", "superpixels", "symmetry", "symmetry_map",)

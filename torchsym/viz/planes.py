@@ -14,7 +14,7 @@ from torchsym.pointcloud.reflection_planes import ReflectionPlanesResult
 from torchsym.viz import artifact_writer
 from torchsym.viz.pointcloud import plane_quad
 
-__all__ = ["plot_reflection_planes", "reflection_planes_ply", "write_reflection_planes"]
+__all__ = ["frame_view", "plot_reflection_planes", "reflection_planes_ply", "write_reflection_planes"]
 
 _COLORS = np.array(
     [[0.12, 0.47, 0.71], [1.0, 0.5, 0.05], [0.17, 0.63, 0.17], [0.84, 0.15, 0.16], [0.58, 0.4, 0.74],
@@ -32,6 +32,19 @@ def _shrunk_quad(points: torch.Tensor, normal: torch.Tensor, offset: torch.Tenso
     """The plane's patch over the cloud, at 85 % of :func:`plane_quad`'s size (which pads by 20 %)."""
     quad = plane_quad(points, normal, offset)
     return quad.mean(0) + 0.85 * (quad - quad.mean(0)) / 1.2
+
+
+def frame_view(ax: Any, mid: np.ndarray, half: float, elev: float, azim: float) -> None:
+    """A 3D ``ax`` looking at the cube of half-width ``half`` about ``mid`` from
+    ``(elev, azim)``, equal aspect, no ticks."""
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_zlim(mid[2] - half, mid[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(elev=elev, azim=azim)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_zticks([])
 
 
 def reflection_planes_ply(data: Any, result: ReflectionPlanesResult, path: str | Path) -> Path:
@@ -91,14 +104,7 @@ def plot_reflection_planes(data: Any, result: ReflectionPlanesResult, path: str 
             seg = np.stack([c - half * d, c + half * d])
             ax.plot(seg[:, 0], seg[:, 1], seg[:, 2], color="k", lw=2.5)
             ax.text(*seg[1], f"axis {a + 1}", color="k", fontsize=10)
-        ax.set_xlim(mid[0] - half, mid[0] + half)
-        ax.set_ylim(mid[1] - half, mid[1] + half)
-        ax.set_zlim(mid[2] - half, mid[2] + half)
-        ax.set_box_aspect((1, 1, 1))
-        ax.view_init(elev=elev, azim=azim)
-        ax.set_xticks([])
-        ax.set_yticks([])
-        ax.set_zticks([])
+        frame_view(ax, mid, half, elev, azim)
     lines = [
         f"{k + 1}: score {float(result.scores[k]):.2f}, ratio {float(result.ratios[k]):.2f}" for k in range(result.n_planes)
     ]

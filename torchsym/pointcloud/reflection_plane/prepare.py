@@ -80,15 +80,19 @@ def normalise(x: torch.Tensor, input_dtype: torch.dtype) -> Normalised:
 
 
 def nn_probe(points: torch.Tensor, index: KNNIndex, generator: torch.Generator) -> torch.Tensor:
-    """Distances ``(M,)`` from up to 1,000 random points to their nearest other point.
+    """Distances ``(M,)`` from up to 1,000 random points to their nearest other point at
+    a positive distance (among the nearest 8: a point listed up to 7 times, as in a
+    cloud whose every point is there twice, still has a spacing).
 
-    Exact duplicates (distance 0) are left out, unless every probe is one.
+    Probes with no positive distance among them are left out, unless every probe is one.
     """
     probe = points[random_subset(points.shape[0], 1000, generator)]
-    d, _ = index.query(probe, k=2)
-    d = d[:, 1]
-    positive = d[d > 0]
-    return positive if positive.numel() else d
+    k = min(8, points.shape[0])
+    d, _ = index.query(probe, k=k)
+    d = d.reshape(probe.shape[0], -1)[:, 1:]
+    d = torch.where(d > 0, d, torch.full_like(d, float("inf"))).min(1).values if d.shape[1] else d.new_zeros(probe.shape[0])
+    positive = d[torch.isfinite(d)]
+    return positive if positive.numel() else torch.zeros_like(d)
 
 
 def spacing(points: torch.Tensor, index: KNNIndex, generator: torch.Generator, q: float | tuple[float, ...] = 0.5):

@@ -171,7 +171,8 @@ def _revolution(normals, offsets, ratios, xs, centered, test: DistanceTest, prob
     Returns ``(normals, offsets, ratios, axes, planes tested)``."""
     acc, al, rev = settings.accept, settings.align, settings.revolution
     cand = candidate_axes(normals, offsets, centered, xs.mean(0), rev.eigen_gap)
-    axes = test_axes(cand, test, rev.n_angles, acc.max_ratio, rev.merge_distance)
+    floor = float(test.far_shares(reflection_transform(normals, offsets)).min()) if normals.shape[0] else 0.0
+    axes = test_axes(cand, test, rev.n_angles, acc.max_ratio, rev.merge_distance, far_floor=floor)
     if not axes:
         return normals, offsets, ratios, axes, 0
     off_axis = [

@@ -72,6 +72,20 @@ class DistanceTest:
             ratio[j] = self.index.query(moved[j])[0].mean() / base[j]
         return ratio
 
+    def far_shares(self, transforms: torch.Tensor, factor: float = 3.0) -> torch.Tensor:
+        """``(K,)`` the share of the queries that each of ``transforms (K, 4, 4)`` moves
+        farther than ``factor`` sampling distances from the second sample, less the same
+        share unmoved (the split's own far share). The mean distance forgives a small
+        part moved far (a hexagonal bolt head turned by a generic angle, the edges of a
+        filled cube or of a flat patch); this tail does not."""
+        t = transforms.to(self.queries)
+        cut = factor * self.base
+        moved = self.queries @ t[:, :3, :3].transpose(1, 2) + t[:, None, :3, 3]
+        d, _ = self.index.query(moved.reshape(-1, 3), max_distance=cut)
+        d0, _ = self.index.query(self.queries, max_distance=cut)
+        far = torch.isinf(d.reshape(t.shape[0], -1)).double().mean(1)
+        return (far - torch.isinf(d0).double().mean()).to(self.queries.dtype)
+
     def _bases(self, moved: torch.Tensor) -> torch.Tensor:
         """``(K,)`` the sampling distance for each transform's moved queries ``(K, Q, 3)``."""
         k = moved.shape[0]
@@ -107,7 +121,10 @@ def distance_test(
 
 
 def split_test(points: torch.Tensor, n_queries: int, generator: torch.Generator, *, local: bool = False) -> DistanceTest:
-    """A :class:`DistanceTest` from a random split of ``points (N, 3)`` into halves."""
+    """A :class:`DistanceTest` from a random split of ``points (N, 3)`` into halves, of
+    its distinct points: a point listed twice would land in both halves at distance 0,
+    and a cloud of every point twice would have no sampling distance (and no plane)."""
+    points = torch.unique(points, dim=0)
     perm = torch.randperm(points.shape[0], generator=generator)
     half = points.shape[0] // 2
     return distance_test(points[perm[:half]], points[perm[half:]], n_queries, generator, local=local)
