@@ -25,7 +25,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(('AxisStage', 'AxisStageSettings', 'BoundaryCliqueDetector', 'BoundaryCliquesSettings', 'ImageAxisResult', 'KSymmetryDetector', 'KSymmetrySettings', 'PointSymmImage', 'PointSymmImageSettings', 'ReflectionAxesBatch', 'ReflectionAxesResult', 'StylizeSolver', 'SymmetryMapResult', 'SymmetryMapSolver', 'SymmSlic', 'SymmSlicResult', 'boundary_clique_axes', 'image_axes', 'ksymmetry_axes', 'point_symm_image', 'stylize', 'symm_slic', 'symmetry_map'), 'torchsym.image'),
     **dict.fromkeys(('IntrinsicSymmetry', 'IntrinsicSymmetryResult', 'IntrinsicSymmetrySettings', 'intrinsic_symmetry'), 'torchsym.mesh'),
     **dict.fromkeys(('MultiviewPlaneDetector', 'MultiviewPlaneResult', 'MultiviewPlaneSettings', 'detect_multiview_plane'), 'torchsym.multiview'),
-    **dict.fromkeys(('ReflectionPlaneDetector', 'ReflectionPlaneResult', 'ReflectionPlaneSettings', 'ReflectionPlanesDetector', 'ReflectionPlanesResult', 'ReflectionPlanesSettings', 'add_outliers', 'detect_reflection_plane', 'detect_reflection_planes', 'planted_symmetric_cloud'), 'torchsym.pointcloud'),
+    **dict.fromkeys(('ReflectionPlaneDetector', 'ReflectionPlaneResult', 'ReflectionPlaneSettings', 'ReflectionPlanesDetector', 'ReflectionPlanesResult', 'ReflectionPlanesSettings', 'SymmetryDetector', 'SymmetryResult', 'SymmetrySettings', 'detect_symmetry', 'add_outliers', 'detect_reflection_plane', 'detect_reflection_planes', 'planted_symmetric_cloud'), 'torchsym.pointcloud'),
     **dict.fromkeys(('PointSymm', 'PointSymmResult', 'PointSymmSettings', 'make_symmetric_pointset', 'point_symm'), 'torchsym.pointset'),
     **dict.fromkeys(('evaluate',), 'torchsym.runner.scoring'),
     **dict.fromkeys(('read_results',), 'torchsym.runner.store'),
@@ -45,6 +45,7 @@ __all__ = [
     # solvers: module, function, result, settings
     "ReflectionPlaneDetector", "detect_reflection_plane", "ReflectionPlaneResult", "ReflectionPlaneSettings",
     "ReflectionPlanesDetector", "detect_reflection_planes", "ReflectionPlanesResult", "ReflectionPlanesSettings",
+    "SymmetryDetector", "detect_symmetry", "SymmetryResult", "SymmetrySettings",
     "PointSymm", "point_symm", "PointSymmResult", "PointSymmSettings",
     "IntrinsicSymmetry", "intrinsic_symmetry", "IntrinsicSymmetryResult", "IntrinsicSymmetrySettings",
     "AxisStage", "image_axes", "AxisStageSettings",
@@ -158,9 +159,13 @@ if TYPE_CHECKING:  # the same names, eagerly, for type checkers and editors
         ReflectionPlanesDetector,
         ReflectionPlanesResult,
         ReflectionPlanesSettings,
+        SymmetryDetector,
+        SymmetryResult,
+        SymmetrySettings,
         add_outliers,
         detect_reflection_plane,
         detect_reflection_planes,
+        detect_symmetry,
         planted_symmetric_cloud,
     )
     from torchsym.pointset import PointSymm, PointSymmResult, PointSymmSettings, make_symmetric_pointset, point_symm

@@ -41,3 +41,10 @@ class SymmetryResult(Result):
     rotoreflections: torch.Tensor
     group: SymmetryGroup
     timings: dict[str, float]
+
+    @property
+    def score(self) -> float:
+        """The shape's symmetry score in [0, 1]: the best of its planes' and its rotation
+        axes' scores (0 when it has neither)."""
+        axis = float(self.axis_scores.max().clamp(0, 1)) if self.axis_scores.numel() else 0.0
+        return max(self.planes.score, axis)
