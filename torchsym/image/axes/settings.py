@@ -7,7 +7,19 @@ import dataclasses
 from torchsym.core.settings import Settings, group, setting
 from torchsym.image.boundary_cliques.settings import BoundaryCliquesSettings
 
-__all__ = ["AxisStageSettings", "Decision", "Photometric", "Refine"]
+__all__ = ["AxisStageSettings", "Border", "Decision", "Photometric", "Refine"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Border(Settings):
+    """The part of the image every score of the stage is taken on: the image less its
+    constant frame and a band inside it (:func:`~torchsym.image.axes.border.content_box`)."""
+
+    tolerance: float = setting(0.01, "a border row or column this close to the first one's colour everywhere is "
+                               "part of a constant frame", low=0.0)
+    margin: float = setting(0.03, "the band left out inside the frame or the image's border", unit="x shorter side",
+                            low=0.0)
+    min_margin: int = setting(4, "the least band", unit="px", low=0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,6 +79,7 @@ class AxisStageSettings(Settings):
 
     candidates: BoundaryCliquesSettings = group(BoundaryCliquesSettings, "the candidate axes (boundary cliques and "
                                                 "mirrored-SIFT pairs, thesis Secs. 2.2-2.3)")
+    border: Border = group(Border)
     photometric: Photometric = group(Photometric)
     refine: Refine = group(Refine)
     decision: Decision = group(Decision)

@@ -12,6 +12,7 @@ Why each step exists: ``docs/design/axes.md``.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -24,6 +25,7 @@ from torchsym.core.random import make_generator
 from torchsym.core.registry import register_solver
 from torchsym.core.results import on_input_device
 from torchsym.core.settings import Solver, resolve_settings
+from torchsym.image.axes.border import content_box
 from torchsym.image.axes.decision import calibrated_score, turned_ncc
 from torchsym.image.axes.extent import grow_extent
 from torchsym.image.axes.level import band_level, from_level, to_level
@@ -35,7 +37,7 @@ from torchsym.image.lines import clip_line_to_image
 from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult, empty_result
 from torchsym.image.suppression import suppress_duplicates
 
-__all__ = ["AxisStage", "image_axes", "verify_candidates"]
+__all__ = ["AxisStage", "image_axes", "shift_result", "verify_candidates"]
 
 METHOD = "axes"
 
@@ -79,10 +81,29 @@ def image_axes(
 
 
 def _one(img: torch.Tensor, settings: AxisStageSettings, generator: torch.Generator) -> ReflectionAxesResult:
-    """:func:`image_axes` on one ``(1, C, H, W)`` image."""
+    """:func:`image_axes` on one ``(1, C, H, W)`` image: every step on its content box
+    (:func:`~torchsym.image.axes.border.content_box`), the axes mapped back."""
     t0 = time.perf_counter()
-    cand = boundary_clique_axes(img.detach(), settings.candidates, generator=generator)
-    return verify_candidates(img, cand, settings, {"stage_seconds": {"candidates": time.perf_counter() - t0}})
+    bd = settings.border
+    y0, y1, x0, x1 = content_box(img[0].detach(), tolerance=bd.tolerance, margin=bd.margin, min_margin=bd.min_margin)
+    crop = img[..., y0:y1, x0:x1]
+    cand = boundary_clique_axes(crop.detach(), settings.candidates, generator=generator)
+    info = {"stage_seconds": {"candidates": time.perf_counter() - t0}, "content_box": [y0, y1, x0, x1]}
+    found = verify_candidates(crop, cand, settings, info)
+    return shift_result(found, x0, y0, (int(img.shape[-2]), int(img.shape[-1])))
+
+
+def shift_result(result: ReflectionAxesResult, x0: int, y0: int, size: tuple[int, int]) -> ReflectionAxesResult:
+    """``result`` found on a crop whose top-left corner is ``(x0, y0)`` in an image of ``size
+    (H, W)``, in that image's pixels."""
+    if x0 == 0 and y0 == 0 and tuple(result.image_size) == tuple(size):
+        return result
+    off = torch.tensor([x0, y0, x0, y0], dtype=result.axes.dtype)
+    lines = result.lines.clone()
+    lines[:, 2] -= lines[:, 0] * x0 + lines[:, 1] * y0
+    return dataclasses.replace(result, axes=result.axes + off.to(result.axes.device),
+                               pairs=result.pairs + off.to(result.pairs.device, result.pairs.dtype),
+                               lines=lines, image_size=tuple(size))
 
 
 def verify_candidates(
