@@ -91,6 +91,7 @@ class TestPhotometric:
 
     def test_calibrated_score_in_unit_interval(self):
         s = calibrated_score(torch.tensor([-2.0, 0.0, 2.0]), torch.tensor([0.0, 0.1, 1.0]), torch.tensor([-1.0, 0.0, 1.0]),
+                             torch.tensor([-1.0, 0.0, 1.0]), torch.tensor([0.0, 1.0, 0.0]),
                              AxisStageSettings().decision)
         assert bool(((s >= 0) & (s <= 1)).all()) and s[2] > s[0]
 

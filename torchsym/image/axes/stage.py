@@ -29,7 +29,8 @@ from torchsym.image.axes.border import content_box
 from torchsym.image.axes.decision import calibrated_score, turned_ncc
 from torchsym.image.axes.extent import grow_extent
 from torchsym.image.axes.level import band_level, from_level, to_level
-from torchsym.image.axes.mirror_ncc import mirror_ncc
+from torchsym.image.axes.global_mirror import MirrorMap, axis_correlation, map_peaks, mirror_map
+from torchsym.image.axes.mirror_ncc import AxisParams, mirror_ncc
 from torchsym.image.axes.refine import refine_axes
 from torchsym.image.axes.settings import AxisStageSettings
 from torchsym.image.boundary_cliques import boundary_clique_axes
@@ -37,7 +38,7 @@ from torchsym.image.lines import clip_line_to_image
 from torchsym.image.results import ReflectionAxesBatch, ReflectionAxesResult, empty_result
 from torchsym.image.suppression import suppress_duplicates
 
-__all__ = ["AxisStage", "image_axes", "shift_result", "verify_candidates"]
+__all__ = ["AxisStage", "candidate_features", "image_axes", "registration_axes", "shift_result", "verify_candidates"]
 
 METHOD = "axes"
 
@@ -110,12 +111,25 @@ def verify_candidates(
     img: torch.Tensor, cand: ReflectionAxesResult, settings: AxisStageSettings, info: dict[str, Any] | None = None
 ) -> ReflectionAxesResult:
     """Steps 2-5 on the candidate axes ``cand`` of the ``(1, C, H, W)`` image ``img``: the
-    photometric test, refinement, the extent, the calibrated score and the decision."""
+    photometric test, refinement, the registration's axes, the calibrated score and the decision."""
     h, w = int(img.shape[-2]), int(img.shape[-1])
     info = dict(info or {}, n_candidates=len(cand))
+    segments, features = candidate_features(img, cand, settings, info)
+    f = features
+    score = calibrated_score(f["contrast"], f["length"], f["evidence"], f["registration"], f["from_map"],
+                             settings.decision)
+    return _ranked(segments, score, features, cand, settings, info, h, w)
+
+
+def candidate_features(
+    img: torch.Tensor, cand: ReflectionAxesResult, settings: AxisStageSettings, info: dict[str, Any]
+) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+    """Every axis to score on ``img (1, C, H, W)``: the candidates ``cand`` (refined as
+    set) and the registration's best axes, as segments ``(N, 4)`` in ``img``'s pixels, with
+    their features ``(N,)`` each (``ncc``, ``contrast``, ``evidence``, ``registration``,
+    ``from_map``, ``length``); timings into ``info``."""
+    h, w = int(img.shape[-2]), int(img.shape[-1])
     stages = info.setdefault("stage_seconds", {})
-    if len(cand) == 0:
-        return empty_result(h, w, METHOD, pairs=cand.pairs, reason=cand.info.get("reason", "no candidate axis"), **info)
     tic = time.perf_counter()
     ph, rf = settings.photometric, settings.refine
     level, scale = band_level(img.detach(), ph.side, ph.band_sigma)
@@ -125,21 +139,62 @@ def verify_candidates(
                                    rounds=rf.rounds, k=rf.steps, n_along=ph.n_along, n_across=ph.n_across)
         if rf.extent_threshold is not None:
             axes = grow_extent(level, axes, threshold=rf.extent_threshold, width=ph.width)
+    stages["photometric"] = time.perf_counter() - tic
+    tic = time.perf_counter()
+    mmap, gscale, found = registration_axes(img, level, scale, settings)
+    axes = AxisParams(*(torch.cat([a, b]) for a, b in zip(
+        (axes.centre, axes.angle, axes.half_length, axes.half_width),
+        (found.centre, found.angle, found.half_length, found.half_width))))
+    n_map = found.angle.shape[0]
+    on_map = AxisParams(_rescale(axes.centre, scale, gscale), axes.angle, axes.half_length, axes.half_width)
+    registration = axis_correlation(mmap, on_map).cpu()
+    from_map = torch.cat([torch.zeros(len(cand)), torch.ones(n_map)])
+    evidence = torch.cat([cand.scores.float().cpu(), torch.zeros(n_map)])
+    stages["registration"] = time.perf_counter() - tic
+    tic = time.perf_counter()
     ncc = mirror_ncc(level, axes, n_along=ph.n_along, n_across=ph.n_across)[0]
     contrast = ncc - turned_ncc(level, axes, n_along=ph.n_along, n_across=ph.n_across).mean(1)
     segments = from_level(axes, scale).cpu().double()
     length = (segments[:, 2:] - segments[:, :2]).norm(dim=1).float() / max(h, w)
-    score = calibrated_score(contrast.cpu(), length, cand.scores.float().cpu(), settings.decision)
-    stages["photometric"] = time.perf_counter() - tic
-    return _ranked(segments, score, ncc.cpu(), contrast.cpu(), cand, settings, info, h, w)
+    stages["photometric"] += time.perf_counter() - tic
+    info["n_registration"] = n_map
+    return segments, {"ncc": ncc.cpu(), "contrast": contrast.cpu(), "evidence": evidence,
+                      "registration": registration, "from_map": from_map, "length": length}
+
+
+def _rescale(xy: torch.Tensor, scale: tuple[float, float], to: tuple[float, float]) -> torch.Tensor:
+    """Points ``xy (N, 2)`` on a level of ``scale`` moved to the level of scale ``to`` (:func:`band_level`)."""
+    s = torch.tensor(scale, device=xy.device, dtype=xy.dtype)
+    t = torch.tensor(to, device=xy.device, dtype=xy.dtype)
+    return (xy + 0.5) / s * t - 0.5
+
+
+def registration_axes(
+    img: torch.Tensor, level: torch.Tensor, scale: tuple[float, float], settings: AxisStageSettings
+) -> tuple[MirrorMap, tuple[float, float], AxisParams]:
+    """The registration of ``img (1, C, H, W)`` with its mirror (:func:`mirror_map` on a grey
+    band-passed level) and its ``count`` best axes on the photometric ``level`` (of
+    ``scale``), each with its extent from the local mirror correlation: ``(map, the map's
+    level scale, axes)``."""
+    rg, ph = settings.registration, settings.photometric
+    grey, gscale = band_level(img.detach(), rg.side, rg.band_sigma)
+    mmap = mirror_map(grey.mean(0, keepdim=True), n_angles=rg.n_angles, min_overlap=rg.min_overlap)
+    angle, centre, _ = map_peaks(mmap, rg.count)
+    centre = _rescale(centre, gscale, scale)
+    whole = torch.full_like(angle, float(max(level.shape[-2:])))
+    found = AxisParams(centre, angle, whole, ph.width * whole)
+    if angle.numel():
+        found = grow_extent(level, found, threshold=rg.extent_threshold, width=ph.width)
+    return mmap, gscale, found
 
 
 def _ranked(
-    segments: torch.Tensor, score: torch.Tensor, ncc: torch.Tensor, contrast: torch.Tensor, cand: ReflectionAxesResult,
+    segments: torch.Tensor, score: torch.Tensor, features: dict[str, torch.Tensor], cand: ReflectionAxesResult,
     settings: AxisStageSettings, info: dict[str, Any], h: int, w: int,
 ) -> ReflectionAxesResult:
     """The result: segments ``(N, 4)`` clipped to the image, duplicates of better axes
-    dropped, at most ``max_axes``, best first; pairs keep the axis their candidate became."""
+    dropped, at most ``max_axes``, best first; pairs keep the axis their candidate became;
+    ``info`` holds each kept axis's ``features (N,)``."""
     lines, extents, segs, keep_idx = [], [], [], []
     for k, seg in enumerate(segments.numpy()):
         d = seg[2:] - seg[:2]
@@ -164,11 +219,10 @@ def _ranked(
     if not order:
         return empty_result(h, w, METHOD, pairs=cand.pairs, reason="no candidate axis inside the image", **info)
     pick = [keep_idx[i] for i in order]
-    new_index = torch.full((len(cand) + 1,), -1, dtype=torch.int64)
+    new_index = torch.full((segments.shape[0] + 1,), -1, dtype=torch.int64)
     new_index[torch.tensor(pick)] = torch.arange(len(pick))
     pair_axis = new_index[cand.pair_axis]  # -1 stays -1 (the last slot)
-    info.update(ncc=[float(ncc[k]) for k in pick], contrast=[float(contrast[k]) for k in pick],
-                candidate_rank=pick)
+    info.update({name: [float(v[k]) for k in pick] for name, v in features.items()}, candidate_rank=pick)
     scores = score[pick].float()
     return ReflectionAxesResult(
         axes=torch.tensor([segs[i] for i in order], dtype=torch.float32),
