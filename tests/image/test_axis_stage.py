@@ -31,7 +31,10 @@ class TestAxisStage:
         res = image_axes(img)
         assert bool((res.scores[:-1] >= res.scores[1:]).all())  # best first
         assert bool(((res.scores >= 0) & (res.scores <= 1)).all())
-        assert torch.equal(res.accepted, res.scores >= AxisStageSettings().decision.threshold)
+        dec = AxisStageSettings().decision
+        expected = (res.scores >= dec.threshold) & torch.cat([torch.ones(1, dtype=torch.bool),
+                                                              res.scores[1:] >= dec.second_threshold])
+        assert torch.equal(res.accepted, expected)
         assert res.accepted_axes.shape == (int(res.accepted.sum()), 4)
 
     def test_default_for_photos(self, single_objects):

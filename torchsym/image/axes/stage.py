@@ -234,8 +234,16 @@ def _ranked(
         method=METHOD,
         converged=cand.converged,
         info=info,
-        accepted=scores >= dec.threshold,
+        accepted=accept(scores, dec.threshold, dec.second_threshold),
     )
+
+
+def accept(scores: torch.Tensor, threshold: float, second: float) -> torch.Tensor:
+    """``(K,)`` bool: the axes of ``scores (K,)`` (best first) at or above ``threshold``, those
+    after the best also at or above ``second``."""
+    keep = scores >= threshold
+    keep[1:] &= scores[1:] >= second
+    return keep
 
 
 @register_solver("axes", kind="image", default=True)
