@@ -88,8 +88,9 @@ class Decision(Settings):
                                     "(:func:`~torchsym.image.axes.global_mirror.axis_correlation`)")
     w_from_map: float = setting(0.0, "added for an axis found by the registration rather than by the candidates")
     threshold: float = setting(0.175, "calibrated score at or above which an axis is accepted", low=0.0, high=1.0)
-    second_threshold: float = setting(0.0, "an axis after the best is accepted only at or above this too (one "
-                                      "symmetric subject, one accepted axis)", low=0.0, high=1.0)
+    second_threshold: float = setting(0.5, "an axis after the best is accepted only at or above this too (one "
+                                      "symmetric subject, one accepted axis; benchmarks/results/axes_pool.md)",
+                                      low=0.0, high=1.0)
     duplicate_angle: float = setting(6.0, "a refined axis this close in angle to a better one...", unit="deg",
                                      low=0.0, high=90.0, low_open=True)
     duplicate_distance: float = setting(0.03, "...with its centre this close to the better's line is the same axis",
