@@ -89,3 +89,9 @@ class TestStageUsesRegistration:
         da, dist = _line_error(angle, (seg[:2] + seg[2:]) / 2, point, phi)
         assert da < 3.0 and dist < 4.0
         assert len(res.info["registration"]) == len(res)
+
+    def test_off_when_neither_axes_nor_weight(self):
+        img, _, _ = mirrored_image(5, 30.0, 0.0)
+        res = image_axes(img, registration={"count": 0})
+        assert res.info["n_registration"] == 0 and res.info["stage_seconds"]["registration"] < 0.01
+        assert all(v == 0.0 for v in res.info["registration"])

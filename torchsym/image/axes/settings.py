@@ -48,7 +48,8 @@ class Registration(Settings):
     n_angles: int = setting(90, "axis directions in [0, 180) deg", low=4)
     min_overlap: float = setting(0.25, "the least overlap of the image and its mirror", unit="x image area", low=0.0,
                                  high=1.0)
-    count: int = setting(3, "best axes of the registration that join the candidates (0: none)", low=0)
+    count: int = setting(3, "best axes of the registration that join the candidates (0 with decision.w_registration 0: "
+                         "no registration at all)", low=0)
     extent_threshold: float = setting(0.2, "their extent: the run along the line whose local mirror correlation "
                                       "stays at or above this (:func:`~torchsym.image.axes.extent.grow_extent`)",
                                       low=-1.0, high=1.0)

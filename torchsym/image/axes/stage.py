@@ -141,13 +141,16 @@ def candidate_features(
             axes = grow_extent(level, axes, threshold=rf.extent_threshold, width=ph.width)
     stages["photometric"] = time.perf_counter() - tic
     tic = time.perf_counter()
-    mmap, gscale, found = registration_axes(img, level, scale, settings)
-    axes = AxisParams(*(torch.cat([a, b]) for a, b in zip(
-        (axes.centre, axes.angle, axes.half_length, axes.half_width),
-        (found.centre, found.angle, found.half_length, found.half_width))))
-    n_map = found.angle.shape[0]
-    on_map = AxisParams(_rescale(axes.centre, scale, gscale), axes.angle, axes.half_length, axes.half_width)
-    registration = axis_correlation(mmap, on_map).cpu()
+    n_map = 0
+    registration = torch.zeros(axes.angle.shape[0])
+    if settings.registration.count > 0 or settings.decision.w_registration != 0:
+        mmap, gscale, found = registration_axes(img, level, scale, settings)
+        axes = AxisParams(*(torch.cat([a, b]) for a, b in zip(
+            (axes.centre, axes.angle, axes.half_length, axes.half_width),
+            (found.centre, found.angle, found.half_length, found.half_width))))
+        n_map = found.angle.shape[0]
+        on_map = AxisParams(_rescale(axes.centre, scale, gscale), axes.angle, axes.half_length, axes.half_width)
+        registration = axis_correlation(mmap, on_map).cpu()
     from_map = torch.cat([torch.zeros(len(cand)), torch.ones(n_map)])
     evidence = torch.cat([cand.scores.float().cpu(), torch.zeros(n_map)])
     stages["registration"] = time.perf_counter() - tic
