@@ -14,6 +14,7 @@ mirror by correlation). Offsets where the overlap of the image and its mirror is
 
 from __future__ import annotations
 
+import functools
 import math
 
 import torch
@@ -54,21 +55,43 @@ def _rotated(level: torch.Tensor, angles: torch.Tensor, size: int) -> tuple[torc
     return vals * inside, inside
 
 
+def _fast_length(n: int) -> int:
+    """The least length >= ``n`` whose only prime factors are 2, 3 and 5 (a fast FFT size)."""
+    while True:
+        m = n
+        for p in (2, 3, 5):
+            while m % p == 0:
+                m //= p
+        if m == 1:
+            return n
+        n += 1
+
+
+@functools.lru_cache(maxsize=4)
+def _geometry(h: int, w: int, n_angles: int, size: int, nfft: int, device: str) -> tuple[torch.Tensor, torch.Tensor]:
+    """What depends on the level's size only: the rows' spectra of the inside mask ``(A, 1, S, F)``
+    and the overlap of the level with its mirror ``(A, 2S)`` (cached: one photograph size after another)."""
+    angles = torch.arange(n_angles, dtype=torch.float32, device=device) * (math.pi / n_angles)
+    _, inside = _rotated(torch.zeros(1, h, w, device=device), angles, size)
+    fi = torch.fft.rfft(inside, n=nfft, dim=-1)
+    overlap = torch.fft.irfft((fi * fi).sum((1, 2)), n=nfft, dim=-1)[:, : 2 * size]
+    return fi, overlap
+
+
 def mirror_map(level: torch.Tensor, *, n_angles: int = 90, min_overlap: float = 0.25) -> MirrorMap:
     """The correlation of ``level (C, h, w)`` (band-passed: about zero-mean) with its mirror
     about every line, at ``n_angles`` axis directions in [0, pi) (:class:`MirrorMap`)."""
     c, h, w = level.shape
     size = int(math.ceil(math.hypot(h, w))) | 1
     angles = torch.arange(n_angles, dtype=torch.float32, device=level.device) * (math.pi / n_angles)
-    vals, inside = _rotated(level.float(), angles, size)  # (A, C, S, S), (A, 1, S, S)
-    nfft = 2 * size
+    vals, _ = _rotated(level.float(), angles, size)  # (A, C, S, S), zero outside the level
+    nfft = _fast_length(2 * size - 1)
+    fi, overlap = _geometry(h, w, n_angles, size, nfft, str(level.device))
     fa = torch.fft.rfft(vals, n=nfft, dim=-1)
-    fi = torch.fft.rfft(inside, n=nfft, dim=-1)
     fe = torch.fft.rfft((vals * vals).sum(1, keepdim=True), n=nfft, dim=-1)
     # the sums over channels and rows are taken on the spectra: one inverse FFT per angle
-    num = torch.fft.irfft((fa * fa).sum((1, 2)), n=nfft, dim=-1)  # (A, 2S)
-    e = torch.fft.irfft((fe * fi).sum((1, 2)), n=nfft, dim=-1)
-    overlap = torch.fft.irfft((fi * fi).sum((1, 2)), n=nfft, dim=-1)
+    num = torch.fft.irfft((fa * fa).sum((1, 2)), n=nfft, dim=-1)[:, : 2 * size]  # (A, 2S)
+    e = torch.fft.irfft((fe * fi).sum((1, 2)), n=nfft, dim=-1)[:, : 2 * size]
     ok = overlap >= min_overlap * float(h * w)
     ncc = torch.where(ok & (e > 1e-9), num / e.clamp_min(1e-9), torch.full_like(num, -1.0))
     return MirrorMap(angles, ncc.clamp(-1.0, 1.0), torch.tensor([(w - 1) / 2, (h - 1) / 2], device=level.device),
