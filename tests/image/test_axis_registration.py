@@ -76,7 +76,7 @@ class TestMirrorMap:
         t = time.perf_counter()
         level, _ = band_level(img[None], 128, 4.0)
         map_peaks(mirror_map(level.mean(0, keepdim=True)), 3)
-        assert time.perf_counter() - t < 1.0  # the target is 0.3 s on a quiet core; loaded CI gets slack
+        assert time.perf_counter() - t < 2.0  # the target is 0.3 s on a quiet core; a shared machine gets slack
 
 
 class TestStageUsesRegistration:
