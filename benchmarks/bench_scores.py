@@ -165,6 +165,12 @@ def _texture_crop(name: str, h: int, w: int, g: torch.Generator) -> torch.Tensor
     return tex[y : y + h, x : x + w].expand(3, -1, -1).clone()
 
 
+def _framed(img: torch.Tensor, colour: float, pad: int, sigma: float) -> torch.Tensor:
+    """``img (C, h, w)`` inside a constant ``pad``-px frame of ``colour``, then smoothed by ``sigma`` (0: not)."""
+    out = torch.nn.functional.pad(img, (pad, pad, pad, pad), value=colour)
+    return _smooth(out, sigma) if sigma > 0 else out
+
+
 def image_families(n: int) -> dict[str, list]:
     h, w = 240, 320
     fam: dict[str, list] = {
@@ -175,6 +181,11 @@ def image_families(n: int) -> dict[str, list]:
     }
     for sigma in (2, 4, 8):
         fam[f"Gaussian-smoothed noise sigma {sigma}"] = [_smooth(torch.rand(3, h, w, generator=_gen(2200 + 10 * sigma + k)), sigma) for k in range(n)]
+    for colour, word in ((0.0, "zero"), (1.0, "white")):  # issue 56: a constant frame around noise
+        fam[f"noise in a 20-px {word} frame, smoothed by sigma 0 / 2 / 4 in turn"] = [
+            _framed(torch.rand(3, h - 40, w - 40, generator=_gen(2500 + 10 * int(colour) + k)), colour, 20, (0, 2, 4)[k % 3])
+            for k in range(n)
+        ]
     photos = sorted(PHOTOS.glob("*.jpg"))
     if photos:
         fam["dev photos shuffled by 40-px blocks"] = [block_shuffle(_photo(photos[k % len(photos)], h, w), 40, _gen(2300 + k)) for k in range(n)]

@@ -73,7 +73,7 @@ def opencv_method(name: str):
 
 def symmslic_method(rgb: np.ndarray, k: int, axis: torch.Tensor | None = None) -> np.ndarray:
     img = torch.from_numpy(rgb).permute(2, 0, 1).float() / 255.0
-    return symm_slic(img, n_superpixels=k, axes=None if axis is None else axis[None]).labels.numpy()
+    return symm_slic(img, n_superpixels=k, known_axes=None if axis is None else axis[None]).labels.numpy()
 
 
 METHODS = {"symmslic": symmslic_method, **{m: opencv_method(m) for m in ("slic", "slico", "mslic", "seeds", "lsc")}}

@@ -45,7 +45,7 @@ def main() -> int:
         n, off = bench.mask_axis(obj)
         r0 = symm_slic(img, gate_off)
         p0 = bench.axis_probe(obj, r0.normals, r0.offsets)
-        r1 = symm_slic(img, params, axes=torch.tensor([[n[0], n[1], off]]))
+        r1 = symm_slic(img, params, known_axes=torch.tensor([[n[0], n[1], off]]))
         agree = p0["axis_found"] and p0["axis_angle_deg"] <= 10 and p0["centroid_distance_px"] <= 0.1 * math.hypot(*obj.shape)
         rows.append({"name": f"{st}/{name}", "gate_off_found": p0["axis_found"], "gate_off_agree": bool(agree),
                      "gate_off_error": segmentation_error(r0.mask.numpy(), obj, ignore=band)["over_image"],

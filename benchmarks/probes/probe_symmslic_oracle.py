@@ -113,7 +113,7 @@ def mirror_part() -> list[dict]:
         for key, kw in (("default", {}), ("gate_off", {"pairs": {"min_support": 0.0}}),
                         ("true_axis", {"axes": torch.tensor([[nrm[0], nrm[1], off]])})):
             axes = kw.pop("axes", None)
-            r = symm_slic(img, kw, axes=axes)
+            r = symm_slic(img, kw, known_axes=axes)
             row[key] = mirror_consistency(r.labels.numpy(), nrm, off, region=region)
             row[f"{key}_tolerant"] = tolerant(r.labels.numpy(), nrm, mid, region)
             if axes is None:
@@ -163,7 +163,7 @@ def seg_part() -> list[dict]:
         obj, ign = seg.read_mask(mpath)
         img = read_image(path)
         n, off = seg.mask_axis(obj)
-        r = symm_slic(img, params, axes=torch.tensor([[n[0], n[1], off]]))
+        r = symm_slic(img, params, known_axes=torch.tensor([[n[0], n[1], off]]))
         lab = (kornia.color.rgb_to_lab(img.reshape(-1, *img.shape[-3:])[:1].float())[0] * LAB_SCALE[:, None, None]).numpy()
         ncc, band, (mx, my) = mirror_correlation(lab, np.asarray(n, dtype=np.float64), float(off))
         labels = r.labels.numpy()

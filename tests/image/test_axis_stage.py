@@ -31,7 +31,10 @@ class TestAxisStage:
         res = image_axes(img)
         assert bool((res.scores[:-1] >= res.scores[1:]).all())  # best first
         assert bool(((res.scores >= 0) & (res.scores <= 1)).all())
-        assert torch.equal(res.accepted, res.scores >= AxisStageSettings().decision.threshold)
+        dec = AxisStageSettings().decision
+        expected = (res.scores >= dec.threshold) & torch.cat([torch.ones(1, dtype=torch.bool),
+                                                              res.scores[1:] >= dec.second_threshold])
+        assert torch.equal(res.accepted, expected)
         assert res.accepted_axes.shape == (int(res.accepted.sum()), 4)
 
     def test_default_for_photos(self, single_objects):
@@ -91,6 +94,7 @@ class TestPhotometric:
 
     def test_calibrated_score_in_unit_interval(self):
         s = calibrated_score(torch.tensor([-2.0, 0.0, 2.0]), torch.tensor([0.0, 0.1, 1.0]), torch.tensor([-1.0, 0.0, 1.0]),
+                             torch.tensor([-1.0, 0.0, 1.0]), torch.tensor([0.0, 1.0, 0.0]),
                              AxisStageSettings().decision)
         assert bool(((s >= 0) & (s <= 1)).all()) and s[2] > s[0]
 

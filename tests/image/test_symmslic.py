@@ -44,7 +44,7 @@ def _mirrored(seed: int = 0, h: int = 160, w: int = 200, angle_deg: float = 20.0
 class TestSymmSlic:
     def test_smoke(self):
         img, ax = _mirrored()
-        r = symm_slic(img, n_superpixels=120, axes=ax)
+        r = symm_slic(img, n_superpixels=120, known_axes=ax)
         assert r.labels.shape == (160, 200) and r.labels.dtype == torch.int64
         assert r.n_superpixels == int(r.labels.max()) + 1 == len(torch.unique(r.labels))
         assert len(r.pairs) > 10 and 0.0 < r.score <= 1.0
@@ -52,7 +52,7 @@ class TestSymmSlic:
     def test_count_near_k(self):
         img, ax = _mirrored()
         for k in (60, 200):
-            r = symm_slic(img, n_superpixels=k, axes=ax)
+            r = symm_slic(img, n_superpixels=k, known_axes=ax)
             assert 0.6 * k <= r.n_superpixels <= 1.3 * k
 
     def test_claim_421_pairs_stay_mirror_images(self):
@@ -88,7 +88,7 @@ class TestSymmSlic:
     def test_mirror_consistency_high_and_above_slic(self):
         cv2 = pytest.importorskip("cv2")
         img, ax = _mirrored(2, angle_deg=-35.0)
-        r = symm_slic(img, n_superpixels=150, axes=ax)
+        r = symm_slic(img, n_superpixels=150, known_axes=ax)
         ours = mirror_consistency(r.labels, ax[0, :2], float(ax[0, 2]))
         s = cv2.ximgproc.createSuperpixelSLIC((img.permute(1, 2, 0).numpy() * 255).astype(np.uint8), region_size=15, ruler=10.0)
         s.iterate(10)
@@ -99,7 +99,7 @@ class TestSymmSlic:
         from scipy import ndimage
 
         img, ax = _mirrored(3)
-        r = symm_slic(img, n_superpixels=100, axes=ax)
+        r = symm_slic(img, n_superpixels=100, known_axes=ax)
         lbl = r.labels.numpy()
         for k in range(r.n_superpixels):
             _, n_parts = ndimage.label(lbl == k)
@@ -130,7 +130,7 @@ class TestSymmSlic:
         with pytest.raises(InputValueError, match="n_superpixels: expected at most"):
             symm_slic(torch.rand(3, 40, 40), n_superpixels=1000)
         with pytest.raises(InputShapeError, match="axes"):
-            symm_slic(torch.rand(3, 40, 40), n_superpixels=20, axes=torch.zeros(1, 3))
+            symm_slic(torch.rand(3, 40, 40), n_superpixels=20, known_axes=torch.zeros(1, 3))
         with pytest.raises(ConfigError, match=r"pairs\.eps"):
             SymmSlicSettings.from_dict({"pairs": {"eps": 1.5}})
 

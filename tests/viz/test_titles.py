@@ -21,7 +21,7 @@ def test_symmslic_and_symmetry_map_pictures_are_titled(tmp_path):
     g = torch.Generator().manual_seed(0)
     half = torch.rand(3, 96, 48, generator=g)
     image = torch.cat([half, half.flip(-1)], dim=-1)
-    for result, name in ((torchsym.symm_slic(image, axes=[[1.0, 0.0, -48.0]], n_superpixels=60), "superpixels"),
+    for result, name in ((torchsym.symm_slic(image, known_axes=[[1.0, 0.0, -48.0]], n_superpixels=60), "superpixels"),
                          (torchsym.symmetry_map(image), "pairs")):
         paths = write_artifacts(result, image, tmp_path, "x")
         picture = cv2.imread(str(next(p for p in paths if p.name == f"x_{name}.png")))

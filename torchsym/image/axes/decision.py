@@ -33,10 +33,14 @@ def turned_ncc(level: torch.Tensor, axes: AxisParams, *, n_along: int, n_across:
     return mirror_ncc(level, turned, n_along=n_along, n_across=n_across)[0].reshape(n, k)
 
 
-def calibrated_score(contrast: torch.Tensor, length: torch.Tensor, evidence: torch.Tensor, decision: Decision) -> torch.Tensor:
+def calibrated_score(contrast: torch.Tensor, length: torch.Tensor, evidence: torch.Tensor, registration: torch.Tensor,
+                     from_map: torch.Tensor, decision: Decision) -> torch.Tensor:
     """The probability that each axis is right, ``(N,)`` in [0, 1], from its ``contrast (N,)``,
-    its segment's ``length (N,)`` over the image's longer side and its candidate's
-    mirrored-gradient ``evidence (N,)`` in [0, 1] (:class:`~torchsym.image.axes.settings.Decision`)."""
+    its segment's ``length (N,)`` over the image's longer side, its candidate's
+    mirrored-gradient ``evidence (N,)`` in [0, 1], the ``registration (N,)`` correlation at
+    the axis and ``from_map (N,)`` (1 for an axis the registration proposed)
+    (:class:`~torchsym.image.axes.settings.Decision`)."""
     z = (decision.intercept + decision.w_contrast * contrast + decision.w_length * torch.log(length.clamp_min(1e-3))
-         + decision.w_evidence * torch.sqrt(evidence.clamp_min(0.0)))
+         + decision.w_evidence * torch.sqrt(evidence.clamp_min(0.0)) + decision.w_registration * registration
+         + decision.w_from_map * from_map)
     return torch.sigmoid(z)

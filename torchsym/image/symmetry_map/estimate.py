@@ -21,6 +21,7 @@ import torch.nn.functional as F
 
 from torchsym.core.checks import check_image, check_unit_range
 from torchsym.core.random import make_generator
+from torchsym.image.axes.accepted import accepted_axes
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError
@@ -40,7 +41,7 @@ from torchsym.image.symmetry_map.result import SymmetryMapResult
 from torchsym.image.symmetry_map.scores import distance_to_points, symmetry_scores
 from torchsym.image.symmetry_map.settings import SymmetryMapSettings
 
-__all__ = ["SymmetryMapSolver", "cluster_field", "clusters_about_axes", "stage_axes", "symmetry_map", "working_image"]
+__all__ = ["SymmetryMapSolver", "cluster_field", "clusters_about_axes", "symmetry_map", "working_image"]
 
 
 def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float]:
@@ -55,20 +56,6 @@ def working_image(image: Any, max_side: int | None) -> tuple[torch.Tensor, float
     s = max_side / max(h, w)
     size = (max(1, round(h * s)), max(1, round(w * s)))
     return F.interpolate(img, size=size, mode="area").clamp(0, 1), max(h, w) / max(size)
-
-
-def stage_axes(image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """The accepted axes of :func:`torchsym.image.axes.image_axes` on ``image (1, C, H, W)``
-    (the best-ranked one when none is accepted: a map is asked for): ``(lines (A, 3), pairs)``
-    with ``pairs`` one ``(M_a, 4)`` tensor of each axis's supporting pairs (boundary and
-    mirrored-SIFT), in ``image``'s pixels."""
-    from torchsym.image.axes.stage import image_axes
-
-    with torch.no_grad():
-        found = image_axes(image)
-    keep = found.accepted.nonzero()[:, 0] if bool(found.accepted.any()) else torch.arange(min(1, len(found)))
-    pairs = [found.pairs[found.pair_axis == int(k)].to(image.device) for k in keep]
-    return found.lines[keep].to(image.device), pairs
 
 
 def clusters_about_axes(
@@ -216,7 +203,7 @@ def symmetry_map(
     cl = settings.clustering
     t = time.perf_counter()
     if k is None:  # the axis stage's accepted axes, each with the pairs about it
-        lines, own = stage_axes(img) if min(h, w) >= 32 else (torch.zeros(0, 3), [])
+        lines, own = accepted_axes(img, settings.axes, generator=gen) if min(h, w) >= 32 else (torch.zeros(0, 3), [])
         seconds["axes"] = time.perf_counter() - t
         t = time.perf_counter()
         pairs, members = clusters_about_axes(pairs, lines, own, max_angle=cl.eps_theta,

@@ -6,6 +6,7 @@ import dataclasses
 from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
+from torchsym.image.axes.settings import AxisStageSettings
 
 __all__ = [
     "CandidateSettings",
@@ -86,6 +87,7 @@ class SymmetryMapSettings(Settings):
 
     n_axes: int | None = setting(None, "symmetry maps (the thesis's k), RansaCov clusters; None: one per axis the axis stage accepts", low=1, high=64)
     max_side: int | None = setting(640, "the image is resized so that its longer side is at most this; None: never", unit="px", low=32)
+    axes: AxisStageSettings = group(AxisStageSettings, "the axis stage whose accepted axes the maps are about with n_axes: null (torchsym.image.axes)")
     candidates: CandidateSettings = group(CandidateSettings)
     clustering: ClusteringSettings = group(ClusteringSettings)
     descriptor: DescriptorSettings = group(DescriptorSettings)

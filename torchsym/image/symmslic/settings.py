@@ -6,6 +6,7 @@ import dataclasses
 from typing import Literal
 
 from torchsym.core.settings import Settings, group, setting
+from torchsym.image.axes.settings import AxisStageSettings
 
 __all__ = ["MirrorPairSettings", "SymmSlicSettings"]
 
@@ -47,6 +48,7 @@ class SymmSlicSettings(Settings):
     axes_from: Literal["stage", "pairs"] = setting(
         "stage", "stage: the axes the axis stage accepts (torchsym.image.axes); pairs: the thesis's Hough vote of its "
         "mirror pixel pairs (Sec. 4.2.1)")
+    axes: AxisStageSettings = group(AxisStageSettings, "the axis stage read with axes_from: stage (torchsym.image.axes)")
     pairs: MirrorPairSettings = group(MirrorPairSettings)
     min_mirror_correlation: float = setting(
         0.8,

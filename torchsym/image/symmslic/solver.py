@@ -31,6 +31,7 @@ import torch
 
 from torchsym.core.checks import as_tensor, check_image
 from torchsym.core.random import make_generator
+from torchsym.image.axes.accepted import accepted_axes
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError, InputValueError
@@ -136,7 +137,7 @@ def symm_slic(
     image: torch.Tensor,
     settings: SymmSlicSettings | Mapping[str, Any] | None = None,
     *,
-    axes: torch.Tensor | None = None,
+    known_axes: torch.Tensor | None = None,
     generator: torch.Generator | None = None,
     **overrides: Any,
 ) -> SymmSlicResult:
@@ -146,7 +147,7 @@ def symm_slic(
         image: ``(C, H, W)`` or ``(1, C, H, W)`` in [0, 1] (uint8 scaled), H, W >= 32.
         settings: :class:`SymmSlicSettings` (or a mapping); defaults: ``k = 500``,
             compactness 10, the thesis's ``p = 64``, ``sigma = 24``, ``eps = 0.2``.
-        axes: optional ``(A, 3)`` known axes ``(n_x, n_y, offset)`` with ``n . (x, y) +
+        known_axes: optional ``(A, 3)`` known axes ``(n_x, n_y, offset)`` with ``n . (x, y) +
             offset = 0``; the pair search is then skipped and each axis's region is the
             set of pixels whose mirror lies in the image. None: the axis stage's accepted
             axes (``axes_from="stage"``, the default) or the pair search's (``"pairs"``).
@@ -171,19 +172,19 @@ def symm_slic(
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     rgb = img.expand(3, -1, -1) if img.shape[0] == 1 else img
-    if axes is None and settings.axes_from == "stage":
-        axes = stage_lines(rgb)
-        if axes.shape[0] == 0:
+    if known_axes is None and settings.axes_from == "stage":
+        known_axes = accepted_axes(rgb[None], settings.axes, generator=gen)[0].double().cpu()
+        if known_axes.shape[0] == 0:
             notes.append("no axis found by the axis stage: plain SLIC superpixels")
-    if axes is not None and len(axes) == 0:
+    if known_axes is not None and len(known_axes) == 0:
         none = torch.zeros(0, 2, dtype=torch.float64)
         found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), none, torch.zeros(0, dtype=torch.float64),
                                  torch.zeros(0, dtype=torch.float64))
         normals, offsets = found.normals, found.offsets
-    elif axes is not None:
-        ax = as_tensor(axes, "axes", dtype=torch.float64)
+    elif known_axes is not None:
+        ax = as_tensor(known_axes, "known_axes", dtype=torch.float64)
         if ax.dim() != 2 or ax.shape[1] != 3 or not bool(torch.isfinite(ax).all()) or bool((ax[:, :2].norm(dim=1) == 0).any()):
-            raise InputShapeError(f"axes: expected (A, 3) finite rows (n_x, n_y, offset) with a nonzero normal, got {tuple(ax.shape)}")
+            raise InputShapeError(f"known_axes: expected (A, 3) finite rows (n_x, n_y, offset) with a nonzero normal, got {tuple(ax.shape)}")
         scale = ax[:, :2].norm(dim=1, keepdim=True)
         normals, offsets = ax[:, :2] / scale, ax[:, 2] / scale[:, 0]
         none = torch.zeros(0, 2, dtype=torch.float64)
@@ -239,18 +240,6 @@ def symm_slic(
         notes=notes,
         timings=timings,
     )
-
-
-def stage_lines(rgb: torch.Tensor) -> torch.Tensor:
-    """``(A, 3)`` float64 lines ``(n_x, n_y, offset)`` of the axes the axis stage
-    (:func:`torchsym.image.axes.image_axes`) accepts on ``rgb (3, H, W)``; the best-ranked
-    one when none is accepted (superpixels are asked for about an axis)."""
-    from torchsym.image.axes.stage import image_axes
-
-    with torch.no_grad():
-        found = image_axes(rgb[None])
-    keep = found.accepted if bool(found.accepted.any()) else torch.arange(len(found)) < 1
-    return found.lines[keep].double().cpu()
 
 
 @register_solver("symmslic", kind="image")
