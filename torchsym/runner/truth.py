@@ -3,7 +3,7 @@
 
 - **photos** (``image``): a text file of ``image x1 y1 x2 y2`` lines, one ground-truth
   axis per line (pixels, origin top-left; ``#`` starts a comment), the format of
-  ``axes.txt`` in ``../shared/data/images/reflection_single_dev``. Scored with the axis
+  ``axes.txt`` of the ICCV 2017 symmetry challenge's photographs. Scored with the axis
   protocol under both criteria (thesis: 3 deg and 0.025 min(w, h); challenge: 10 deg and
   20 % of the ground-truth length, :func:`torchsym.metrics.evaluate_axes`).
 - **point clouds** (``pointcloud``): a ``.jsonl`` file, one plane per line:
