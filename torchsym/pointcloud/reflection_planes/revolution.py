@@ -76,14 +76,16 @@ def contains_axis(normal: torch.Tensor, offset: torch.Tensor, direction: torch.T
 
 def test_axes(
     axes: list[tuple[torch.Tensor, torch.Tensor]], test: DistanceTest, n_angles: int, max_ratio: float, merge_tol: float,
-    max_far_share: float = 0.02,
+    max_far_share: float = 0.04,
     far_floor: float = 0.0,
 ) -> list[tuple[torch.Tensor, torch.Tensor, float]]:
     """The distinct axes among ``axes`` whose rotations by ``n_angles`` generic angles all
     pass ``test`` (the worst ratio at most ``max_ratio``, and at most ``max_far_share``
     more of the points moved farther than 3 sampling distances than ``far_floor``, the
     accepted planes' least share (holes move points far under every symmetry),
-    :meth:`~.distance_test.DistanceTest.far_shares`): ``(direction, point, ratio)``,
+    :meth:`~.distance_test.DistanceTest.far_shares`; 0.04: a cylinder with three 2 %
+    holes reads 0.05 against its planes' 0.017, a filled cube 0.08, a hexagonal bolt
+    0.14): ``(direction, point, ratio)``,
     best first. Two axes are one when within ``merge_tol`` of each other (ends of a unit
     segment, either orientation)."""
     angles = torch.tensor([2.0 * math.pi * ((1 + k) * _GOLDEN % 1.0) for k in range(n_angles)], dtype=torch.float64)

@@ -10,6 +10,7 @@ them, and the closure of all of them about their common fixed point
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Mapping
@@ -130,7 +131,11 @@ def detect_symmetry(
     t_rot = time.perf_counter()
 
     # 3. One group, about the common fixed point.
-    grp = _close(planes, axes, roto, scale, origin, settings)
+    verify = None
+    if rot.enabled:  # every element of the group, not only the generators, passes the test
+        centre = (_fixed_point(planes, axes, scale, origin) - origin) / scale
+        verify = functools.partial(_all_pass, test=test, centre=centre, max_ratio=rot.max_ratio)
+    grp = _close(planes, axes, roto, scale, origin, settings, verify)
     t_end = time.perf_counter()
     f64 = torch.float64
     return SymmetryResult(
@@ -144,6 +149,14 @@ def detect_symmetry(
         group=grp,
         timings={"planes": t_planes - t0, "rotations": t_rot - t_planes, "group": t_end - t_rot, "total": t_end - t0},
     )
+
+
+def _all_pass(linear: torch.Tensor, *, test, centre: torch.Tensor, max_ratio: float) -> bool:
+    """Whether every ``linear (K, 3, 3)`` about ``centre (3,)`` (normalised coordinates)
+    passes the distance test."""
+    t = torch.zeros(linear.shape[0], 4, 4, dtype=torch.float64)
+    t[:, :3, :3], t[:, :3, 3], t[:, 3, 3] = linear, centre - linear @ centre, 1.0
+    return bool((test.ratios(t, bound=max_ratio) <= max_ratio).all())
 
 
 def _rotoreflections(xs, index, test, axes, tol, s0, rot) -> list[torch.Tensor]:
@@ -175,12 +188,13 @@ def _to_input(t: torch.Tensor, scale: float, origin: torch.Tensor) -> torch.Tens
     return out
 
 
-def _close(planes, axes, roto, scale, origin, settings: SymmetrySettings) -> SymmetryGroup:
+def _close(planes, axes, roto, scale, origin, settings: SymmetrySettings, verify=None) -> SymmetryGroup:
     """One group, about the least-squares point on every plane and axis: the candidates,
     most trusted first (the direct rotations by exactly ``2 pi / n``, highest order
     first; the rotoreflections; the planes within ``accept.generator_factor`` of the best
     plane's ratio, best first; a plane through each axis of revolution), snapped to the principal axis (:func:`snap_generators`) and taken
-    greedily while they close to a finite group (:func:`consistent_group`)."""
+    greedily while they close to a finite group whose new elements ``verify`` accepts
+    (:func:`consistent_group`)."""
     g = settings.group
     cont = planes.continuous_axes.to(torch.float64)
     through = tangent_basis(cont)[..., 0] if cont.shape[0] else torch.zeros(0, 3, dtype=torch.float64)
@@ -209,7 +223,7 @@ def _close(planes, axes, roto, scale, origin, settings: SymmetrySettings) -> Sym
         principal = raw.axes[int(raw.orders.argmax())] if raw.axes.shape[0] else None
     if principal is not None:
         lin = snap_generators(lin, principal, g.max_order)
-    return consistent_group(lin, center, **kwargs)
+    return consistent_group(lin, center, verify=verify, **kwargs)
 
 
 def _fixed_point(planes, axes, scale, origin) -> torch.Tensor:

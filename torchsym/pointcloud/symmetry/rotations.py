@@ -219,10 +219,12 @@ def find_axes(
     merge_tol: float,
     relative: float = 1.15,
     max_far_share: float = 0.02,
+    max_refined: int = 4,
 ) -> list[tuple[torch.Tensor, torch.Tensor, int, float]]:
     """The distinct axes among ``candidates`` with an order of 2 or more:
     ``(direction, point, order, ratio)``, the highest order first. Candidates whose best
-    ratio is at most ``refine_ratio`` are refined (:func:`refine_axis`) and measured again;
+    ratio is at most ``refine_ratio`` (the ``max_refined`` lowest) are refined
+    (:func:`refine_axis`, :func:`polish_axis` on 1,000 queries) and measured again;
     an order passes within ``max_ratio`` and ``relative`` times the axis's best ratio,
     with no more than ``max_far_share`` of the points moved far (:func:`_turns_pass`);
     two axes within ``merge_tol`` (:func:`same_line`) are one."""
@@ -234,18 +236,20 @@ def find_axes(
     if not candidates:
         return []
     ratios = _orders_ratios(candidates, test, max_order, refine_ratio)
+    quick = dataclasses.replace(test, queries=test.queries[:1000])  # the pattern search's queries
     found = []
-    for (d, p), r in zip(candidates, ratios):
+    order = ratios.min(1).values.argsort()[:max_refined].tolist()  # the most promising first
+    for (d, p), r in ((candidates[i], ratios[i]) for i in order):
         best = int(r.argmin()) + 2
         if float(r.min()) > refine_ratio:
             continue
         if any(same_line(d, p, f[0], f[1], merge_tol) for f in found):
             continue
         d, p = refine_axis(d, p, best, queries, index)
-        d, p, _ = polish_axis(d, p, best, test)
+        d, p, _ = polish_axis(d, p, best, quick)
         r2 = _orders_ratios([(d, p)], test, max_order, max_ratio)[0]
         if int(r2.argmin()) + 2 != best:  # polished for an order that is not the best one now
-            d, p, _ = polish_axis(d, p, int(r2.argmin()) + 2, test)
+            d, p, _ = polish_axis(d, p, int(r2.argmin()) + 2, quick)
             r2 = _orders_ratios([(d, p)], test, max_order, max_ratio)[0]
         best = int(r2.argmin()) + 2
         floor = float(test.far_shares(rotation_transforms(d, p, torch.tensor([2.0 * math.pi / best], dtype=d.dtype)))[0])
@@ -291,7 +295,7 @@ def half_turns_across(
     if float(r[best]) > 2.0 * max_ratio:
         return []
     u, q = refine_axis(lines[best][0], foot, 2, queries, index)
-    u, q, _ = polish_axis(u, q, 2, test)
+    u, q, _ = polish_axis(u, q, 2, dataclasses.replace(test, queries=test.queries[:1000]))
     u = u - (u @ d) * d  # across the axis, exactly
     u = u / u.norm()
     t = rotation_transforms(u, q, torch.tensor([math.pi], dtype=d.dtype))
