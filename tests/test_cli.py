@@ -174,6 +174,7 @@ class TestCLIFiles:
         assert "a_empty.npy" in err and "cannot read" in err and "1 of 2 inputs failed" in err
         assert json.loads((tmp_path / "o" / "b.json").read_text())["result"]["type"] == "ReflectionPlaneResult"
 
+    @pytest.mark.slow
     @pytest.mark.parametrize("argv", [["detect", "missing.xyz"], ["detect"], ["detect", "x.xyz", "--kind", "bogus"], ["nope"]])
     def test_errors_are_one_line(self, tmp_path, argv):
         env = {**os.environ, "PYTHONPATH": str(Path(torchsym.__file__).parents[1])}

@@ -46,6 +46,7 @@ def _planes(group) -> int:
 
 
 class TestRotationsFoundDirectly:
+    @pytest.mark.slow
     @pytest.mark.parametrize("n", [3, 5])
     def test_chiral_part_about_an_axis(self, n):
         res = detect_symmetry(_cloud(about_axis(PART, n), pose=n))
@@ -55,30 +56,36 @@ class TestRotationsFoundDirectly:
         assert g.closed and g.order == n and _planes(g) == 0
         assert sorted(g.orders.tolist()) == [n]
 
+    @pytest.mark.slow
     def test_achiral_part_about_an_axis(self):
         res = detect_symmetry(_cloud(about_axis(PART, 4, mirror=True), pose=7))
         g = res.group
         assert g.closed and g.order == 8 and _planes(g) == 4
         assert int(g.orders.max()) == 4
 
+    @pytest.mark.slow
     def test_fan_with_pitched_blades_is_dihedral_without_planes(self):
         g = detect_symmetry(_cloud(fan_mesh(5), pose=3)).group
         assert g.closed and g.order == 10 and _planes(g) == 0
         assert sorted(g.orders.tolist()) == [2, 2, 2, 2, 2, 5]
 
+    @pytest.mark.slow
     def test_gear(self):
         g = detect_symmetry(_cloud(gear_mesh(7), n=8000)).group
         assert g.closed and g.order == 28 and _planes(g) == 8
 
+    @pytest.mark.slow
     def test_bolt_is_not_a_surface_of_revolution(self):
         res = detect_symmetry(_cloud(bolt_mesh(), n=8000))
         assert res.planes.continuous_axes.shape[0] == 0
         assert int(res.group.orders.max()) == 6 and _planes(res.group) == 6
 
+    @pytest.mark.slow
     def test_asymmetric_part_has_no_symmetry(self):
         g = detect_symmetry(_cloud(PART)).group
         assert g.order == 1
 
+    @pytest.mark.slow
     def test_module_matches_function_and_detect(self):
         pts = _cloud(about_axis(PART, 3))
         a = SymmetryDetector()(pts)
@@ -155,6 +162,7 @@ class TestNoFalseRevolution:
         tet = Mesh(v, torch.tensor([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]))
         assert self._axes(sample_surface(tet, 8000, generator=0)) == 0
 
+    @pytest.mark.slow
     def test_filled_cube(self):
         assert self._axes(torch.rand(8000, 3, generator=torch.Generator().manual_seed(0))) == 0
 
@@ -170,6 +178,7 @@ def test_every_point_twice_still_has_its_planes():
 
 
 class TestBOP:
+    @pytest.mark.slow
     def test_models_folder_to_models_info_in_one_command(self, tmp_path):
         from torchsym.io import write_mesh
         from torchsym.pointcloud import read_models_info

@@ -47,6 +47,7 @@ class TestRunSerial:
         fresh = run(cfg, [str(f) for f in files], out, engine="serial", imports=[PROBE], resume=False)
         assert fresh.n_run == 3 and len(read_results(out, latest=False)) == 3
 
+    @pytest.mark.slow
     def test_driver_killed_and_resumed(self, tmp_path, markers):
         files = _clouds(tmp_path / "in", 6)
         out = tmp_path / "r.jsonl"

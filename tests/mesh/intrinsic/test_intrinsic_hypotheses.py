@@ -57,6 +57,7 @@ class TestExtrinsicHypothesis:
         result, _, _ = solved
         assert result.hypothesis != "extrinsic" and "extrinsic" not in result.timings
 
+    @pytest.mark.slow
     def test_used_when_the_intrinsic_maps_are_weak(self, blob):
         from torchsym.mesh.synthetic import punch_holes
 
@@ -161,6 +162,7 @@ class TestExtrinsicHypothesis:
         out = intrinsic_symmetry(Mesh(torch.from_numpy(v), torch.tensor(faces)), fill_holes=False)
         assert "extrinsic" in out.timings and out.hypothesis != "extrinsic"
 
+    @pytest.mark.slow
     def test_any_seed(self, blob):
         from torchsym.mesh.synthetic import punch_holes
 
