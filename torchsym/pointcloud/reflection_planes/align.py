@@ -18,10 +18,10 @@ from torchsym.geometry.reflection import tangent_basis
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.prealign import SUPPORT_REACH, neighbourhood_pca
 
-__all__ = ["align_planes", "nearest_surface", "plane_supports", "reflect_batch", "surface_patches"]
+__all__ = ["align_planes", "nearest_surface", "plane_supports", "reflect_in_planes", "surface_patches"]
 
 
-def reflect_batch(points: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
+def reflect_in_planes(points: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
     """``(K, Q, 3)``: ``points (Q, 3)`` reflected in each plane ``normals (K, 3)``, ``offsets (K,)``."""
     signed = points @ normals.T + offsets  # (Q, K)
     return points[None] - 2.0 * signed.T[:, :, None] * normals[:, None, :]
@@ -89,7 +89,7 @@ def align_planes(queries, match, normals, offsets, *, max_iters: int, tol_angle:
     for _ in range(max_iters):
         idx = active.nonzero()[:, 0]
         n, b = normals[idx], offsets[idx]
-        q, nu = match(reflect_batch(queries, n, b).reshape(-1, 3))
+        q, nu = match(reflect_in_planes(queries, n, b).reshape(-1, 3))
         n_new, b_new = _gauss_newton_step(queries, q.reshape(-1, nq, 3), nu.reshape(-1, nq, 3), n, b)
         flip = (n_new * n).sum(1) < 0
         n_new = torch.where(flip[:, None], -n_new, n_new)
@@ -106,6 +106,6 @@ def plane_supports(points, index: KNNIndex, normals, offsets, sigma: float) -> t
     """``(K,)`` soft share of ``points (Q, 3)`` whose mirror image in each plane lands near
     the set behind ``index`` (mean of ``exp(-d^2 / 2 sigma^2)``), as the one-plane
     detector's ``support``, for all planes from one query."""
-    moved = reflect_batch(points, normals, offsets).reshape(-1, 3)
+    moved = reflect_in_planes(points, normals, offsets).reshape(-1, 3)
     d, _ = index.query(moved, max_distance=SUPPORT_REACH * sigma)
     return torch.exp(-0.5 * (d.reshape(normals.shape[0], -1) / sigma) ** 2).mean(1)

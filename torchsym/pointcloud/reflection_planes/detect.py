@@ -30,7 +30,7 @@ from torchsym.pointcloud.reflection_planes.align import (
     align_planes,
     nearest_surface,
     plane_supports,
-    reflect_batch,
+    reflect_in_planes,
     surface_patches,
 )
 from torchsym.pointcloud.reflection_planes.distance_test import DistanceTest, split_test
@@ -232,7 +232,7 @@ def _scores_and_pairs(xs, index: KNNIndex, normals, offsets, tol: float, s0: flo
     if k == 0:
         return [], torch.zeros(0, 3, dtype=torch.int64)
     # only "within tol" matters: a bounded search skips the far queries, the slow ones
-    dist, nn = index.query(reflect_batch(xs, normals, offsets).reshape(-1, 3), max_distance=2.0 * tol)
+    dist, nn = index.query(reflect_in_planes(xs, normals, offsets).reshape(-1, 3), max_distance=2.0 * tol)
     dist, nn = dist.reshape(k, n), nn.reshape(k, n)
     idx = torch.arange(n)
     scores, pairs = [], []

@@ -12,7 +12,7 @@ import math
 
 import torch
 
-from torchsym.pointcloud.reflection_planes.align import reflect_batch
+from torchsym.pointcloud.reflection_planes.align import reflect_in_planes
 
 __all__ = ["MERGE_ANGLE", "conjugate_planes", "distinct_planes", "mirror_gaps"]
 
@@ -24,8 +24,8 @@ MERGE_ANGLE = 5.0
 def mirror_gaps(probe: torch.Tensor, normals: torch.Tensor, offsets: torch.Tensor, others_n, others_b) -> torch.Tensor:
     """``(K, L)`` median over ``probe (Q, 3)`` of the distance between its mirror images
     in plane ``k`` of ``(normals, offsets)`` and plane ``l`` of ``(others_n, others_b)``."""
-    a = reflect_batch(probe, normals, offsets)  # (K, Q, 3)
-    b = reflect_batch(probe, others_n, others_b)  # (L, Q, 3)
+    a = reflect_in_planes(probe, normals, offsets)  # (K, Q, 3)
+    b = reflect_in_planes(probe, others_n, others_b)  # (L, Q, 3)
     return (a[:, None] - b[None]).norm(dim=-1).median(-1).values
 
 
