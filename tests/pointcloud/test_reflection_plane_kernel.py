@@ -16,7 +16,7 @@ from torchsym.pointcloud import (
     planted_symmetric_cloud,
 )
 from torchsym.pointcloud.reflection_plane.kernel import kernel_refine, kernel_score, surface_variation
-from torchsym.pointcloud.reflection_plane.prepare import dense_part
+from torchsym.pointcloud.prepare import dense_part
 
 
 def _turned(normal: torch.Tensor, degrees: float) -> torch.Tensor:

@@ -5,7 +5,8 @@ import torch
 from torchsym.geometry import reflect_points
 from torchsym.matching import KNNIndex
 from torchsym.pointcloud import planted_symmetric_cloud
-from torchsym.pointcloud.reflection_plane.prealign import local_pca, neighbourhood_pca, support
+from torchsym.pointcloud.neighbourhood import neighbourhood_pca
+from torchsym.pointcloud.reflection_plane.prealign import local_pca, support
 
 
 def _cloud(n: int = 2000):

@@ -1,10 +1,10 @@
-"""torchsym.pointcloud.reflection_plane.prepare: normalisation and samples."""
+"""torchsym.pointcloud.prepare: normalisation and samples."""
 
 import pytest
 import torch
 
 from torchsym.errors import InputValueError
-from torchsym.pointcloud.reflection_plane.prepare import normalise
+from torchsym.pointcloud.prepare import normalise
 
 
 class TestNormalise:

@@ -6,7 +6,7 @@ import torch
 import torchsym.pointcloud.reflection_plane.starts as starts
 from torchsym.core.settings import resolve_settings
 from torchsym.pointcloud import planted_symmetric_cloud
-from torchsym.pointcloud.reflection_plane.prepare import normalise, subsample
+from torchsym.pointcloud.prepare import normalise, subsample
 from torchsym.pointcloud.reflection_plane.settings import ReflectionPlaneSettings
 
 

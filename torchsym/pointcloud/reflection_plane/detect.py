@@ -25,9 +25,9 @@ from torchsym.geometry.reflection import reflect_points
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.kernel import needs_kernel, refine_by_kernel
 from torchsym.pointcloud.reflection_plane.polish import polish
-from torchsym.pointcloud.reflection_plane.prepare import dense_part, normalise, subsample
+from torchsym.pointcloud.prepare import dense_part, normalise, subsample
 from torchsym.pointcloud.reflection_plane.result import ReflectionPlaneResult, make_result, mirror_pairs
-from torchsym.pointcloud.reflection_plane.score import chance_corrected_score
+from torchsym.pointcloud.score import chance_corrected_score
 from torchsym.pointcloud.reflection_plane.settings import ReflectionPlaneSettings
 from torchsym.pointcloud.reflection_plane.starts import principal_axes, refine_context, search_starts
 

@@ -18,8 +18,9 @@ from torchsym.core.random import random_subset
 from torchsym.geometry.reflection import plane_angle, reflect_points, reflection_fit
 from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.alternation import alternate, kept_pairs
-from torchsym.pointcloud.reflection_plane.prealign import neighbourhood_pca, point_to_plane_step
-from torchsym.pointcloud.reflection_plane.prepare import spacing
+from torchsym.pointcloud.neighbourhood import neighbourhood_pca
+from torchsym.pointcloud.reflection_plane.prealign import point_to_plane_step
+from torchsym.pointcloud.prepare import spacing
 from torchsym.pointcloud.reflection_plane.settings import PolishSettings, ReflectionPlaneSettings
 
 __all__ = ["Polished", "local_surface", "pair_steps", "polish", "surface_steps"]

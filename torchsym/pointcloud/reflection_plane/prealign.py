@@ -12,23 +12,10 @@ import torch
 
 from torchsym.geometry.reflection import plane_angle, reflect_points, tangent_basis
 from torchsym.matching.knn import KNNIndex
+from torchsym.pointcloud.neighbourhood import SUPPORT_REACH, neighbourhood_pca
 from torchsym.optim.convergence import remaining_factor
 
-__all__ = ["local_pca", "neighbourhood_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
-
-
-def neighbourhood_pca(
-    points: torch.Tensor, index: KNNIndex, at: torch.Tensor, k: int = 10
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """The ``k`` nearest points of ``points (N, 3)`` (``index`` over them) to each of
-    ``at (M, 3)``: their centroid ``(M, 3)``, and the eigenvalues ``(M, 3)`` (ascending)
-    and eigenvectors ``(M, 3, 3)`` (columns) of their scatter matrix."""
-    _, j = index.query(at, k=min(k, points.shape[0]))
-    nb = points[j]  # (M, k, 3)
-    centroid = nb.mean(1)
-    nb = nb - centroid[:, None, :]
-    lam, vecs = torch.linalg.eigh(nb.transpose(1, 2) @ nb)
-    return centroid, lam, vecs
+__all__ = ["local_pca", "point_normals", "point_to_plane_step", "pre_align", "support"]
 
 
 def local_pca(points: torch.Tensor, index: KNNIndex, k: int = 10) -> tuple[torch.Tensor, torch.Tensor]:
@@ -100,8 +87,6 @@ def pre_align(queries, targets, index, nu, normal, offset, *, max_iters: int, to
     return normal, offset, it
 
 
-#: residuals beyond this many kernel widths add less than exp(-18) to a support: not searched for
-SUPPORT_REACH = 6.0
 
 
 def support(points, index, normal, offset, sigma: float) -> tuple[float, float]:

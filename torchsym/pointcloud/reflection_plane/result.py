@@ -9,7 +9,7 @@ import torch
 from torchsym.core.results import Result
 from torchsym.geometry.reflection import canonical_sign, reflect_points, reflection_matrix, reflection_transform
 from torchsym.matching.knn import mutual_nearest
-from torchsym.pointcloud.reflection_plane.prepare import Normalised
+from torchsym.pointcloud.prepare import Normalised
 
 __all__ = ["MirrorPairs", "ReflectionPlaneResult", "make_result", "mirror_pairs"]
 

@@ -19,7 +19,7 @@ from torchsym.matching.knn import KNNIndex
 from torchsym.pointcloud.reflection_plane.alternation import alternate
 from torchsym.pointcloud.reflection_plane.candidates import initial_normals, score_normals
 from torchsym.pointcloud.reflection_plane.prealign import local_pca, pre_align, support
-from torchsym.pointcloud.reflection_plane.prepare import Subsample
+from torchsym.pointcloud.prepare import Subsample
 from torchsym.pointcloud.reflection_plane.settings import ReflectionPlaneSettings, StartsSettings
 
 __all__ = [

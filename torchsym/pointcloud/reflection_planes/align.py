@@ -16,7 +16,7 @@ import torch
 
 from torchsym.geometry.reflection import tangent_basis
 from torchsym.matching.knn import KNNIndex
-from torchsym.pointcloud.reflection_plane.prealign import SUPPORT_REACH, neighbourhood_pca
+from torchsym.pointcloud.neighbourhood import SUPPORT_REACH, neighbourhood_pca
 
 __all__ = ["align_planes", "nearest_surface", "plane_supports", "reflect_in_planes", "surface_patches"]
 

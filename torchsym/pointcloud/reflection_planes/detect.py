@@ -23,8 +23,8 @@ from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.geometry.reflection import canonical_sign, reflection_transform
 from torchsym.matching.knn import KNNIndex, mutual_nearest
-from torchsym.pointcloud.reflection_plane.prepare import normalise, spacing, subsample
-from torchsym.pointcloud.reflection_plane.score import chance_share, corrected_share
+from torchsym.pointcloud.prepare import normalise, spacing, subsample
+from torchsym.pointcloud.score import chance_share, corrected_share
 from torchsym.pointcloud.reflection_plane.starts import candidate_starts, principal_axes, refine_context
 from torchsym.pointcloud.reflection_planes.align import (
     align_planes,

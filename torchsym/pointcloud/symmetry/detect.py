@@ -24,8 +24,8 @@ from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.geometry.reflection import reflection_matrix, tangent_basis
 from torchsym.matching.knn import KNNIndex
-from torchsym.pointcloud.reflection_plane.prepare import normalise
-from torchsym.pointcloud.reflection_plane.score import chance_share, corrected_share
+from torchsym.pointcloud.prepare import normalise
+from torchsym.pointcloud.score import chance_share, corrected_share
 from torchsym.pointcloud.reflection_planes.detect import detect_reflection_planes
 from torchsym.pointcloud.reflection_planes.distance_test import split_test
 from torchsym.pointcloud.reflection_planes.group import (
