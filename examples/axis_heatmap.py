@@ -1,13 +1,17 @@
-"""Regress reflection-axis heat maps on synthetic images (EquiSym-style targets, kornia's focal loss).
+"""Regress reflection-axis heat maps on synthetic images (EquiSym-style targets, a small U-Net).
 
 Synthetic 64 x 64 images each hold one mirror-symmetric object at a random angle
 (:func:`torchsym.image.synthetic.mirrored_objects_image`). Their axes become EquiSym
 heat maps (:func:`torchsym.image.axis_heatmap`, ``mode="equisym"``).
 
-1. Learn: a small dilated fully convolutional network (with two coordinate channels) is
-   trained on them with kornia's binary focal loss and scored on held-out images by
+1. Learn: each image is compared with its mirror images about 16 lines through the image
+   centre (``|image - mirrored|``, one channel per angle: near zero on the object at its
+   axis's angle); with RGB and two coordinate channels these feed a small U-Net at half
+   resolution (receptive field: the whole image), trained with binary cross-entropy
+   (``pos_weight`` 10) and a one-cycle learning rate, and scored on held-out images by
    EquiSym's pixel-map F1 (:func:`torchsym.metrics.axis_pixel_f1`; the radius scaled from
-   EquiSym's 5 px at 417 px to 2 px at 64 px), against uniform noise.
+   EquiSym's 5 px at 417 px to 2 px at 64 px), against uniform noise. The defaults run in
+   about a minute on one CPU thread and reach a held-out F1 of about 0.67 (noise: 0.08).
 2. Fit: the heat map is differentiable in the segment's end points, so the end points
    themselves can be regressed: from the true axis moved by 5 px noise per coordinate,
    Adam on ``|axis_heatmap(segment) - target|^2`` (Gaussian mode, sigma 3 px) brings
@@ -15,49 +19,87 @@ heat maps (:func:`torchsym.image.axis_heatmap`, ``mode="equisym"``).
 
 Writes a PNG of held-out images, targets, network predictions and fitted axes.
 
-    python examples/axis_heatmap.py [--steps 300] [--out examples/output]
+    python examples/axis_heatmap.py [--steps 1200] [--out examples/output]
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import torch
 from torch import nn
+from torch.nn import functional as F
 
 from torchsym.image import axis_heatmap
 from torchsym.image.synthetic import mirrored_objects_image
-from torchsym.losses import binary_focal_loss_with_logits
 from torchsym.metrics import axis_pixel_f1
 
 SIZE = 64
 
 
+def mirror_differences(images: torch.Tensor, n_angles: int = 16) -> torch.Tensor:
+    """``|image - image mirrored|``, mean over RGB, ``(n, n_angles, H, W)`` for ``images (n, 3, H, W)``:
+    one channel per line through the image centre at angles ``k * pi / n_angles``; near zero
+    on the object in the channel nearest its axis."""
+    n = images.shape[0]
+    theta = torch.arange(n_angles, dtype=images.dtype) * math.pi / n_angles  # (K,)
+    cos, sin = torch.cos(2 * theta), torch.sin(2 * theta)
+    zero = torch.zeros_like(cos)
+    reflect = torch.stack([torch.stack([cos, sin, zero], -1), torch.stack([sin, -cos, zero], -1)], 1)  # (K, 2, 3)
+    grids = F.affine_grid(reflect, [n_angles, 3, SIZE, SIZE], align_corners=False)  # (K, H, W, 2)
+    out = []
+    for grid in grids:
+        mirrored = F.grid_sample(images, grid.expand(n, -1, -1, -1), align_corners=False, padding_mode="border")
+        out.append((images - mirrored).abs().mean(1))  # (n, H, W)
+    return torch.stack(out, 1)  # (n, K, H, W)
+
+
 def make_set(n: int, seed: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """``images (n, 5, H, W)`` (RGB + coordinates), EquiSym targets ``(n, 1, H, W)``, drawn axes ``(n, 1, H, W)``
-    and the axes ``(n, 4)``."""
+    """``inputs (n, 5 + 16, H, W)`` (RGB, coordinates, mirror differences), EquiSym targets
+    ``(n, 1, H, W)``, drawn axes ``(n, 1, H, W)`` and the axes ``(n, 4)``."""
     imgs, segs = [], []
     for i in range(n):
         img, axes = mirrored_objects_image(1, height=SIZE, width=SIZE, generator=torch.Generator().manual_seed(seed + i))
         imgs.append(img)
         segs.append(axes.float())
+    images = torch.stack(imgs)  # (n, 3, H, W)
     segs_t = torch.stack(segs)  # (n, 1, 4)
     target = axis_heatmap(segs_t, (SIZE, SIZE), mode="equisym")
     drawn = (axis_heatmap(segs_t, (SIZE, SIZE), mode="gaussian", sigma=0.5) > 0.5).float()
     ys, xs = torch.meshgrid(torch.linspace(-1, 1, SIZE), torch.linspace(-1, 1, SIZE), indexing="ij")
     coords = torch.stack([xs, ys]).expand(n, -1, -1, -1)
-    return torch.cat([torch.stack(imgs), coords], 1), target, drawn, segs_t[:, 0]
+    return torch.cat([images, coords, mirror_differences(images)], 1), target, drawn, segs_t[:, 0]
 
 
-def make_net(width: int = 24) -> nn.Module:
-    layers: list[nn.Module] = []
-    c = 5
-    for dil in (1, 2, 4, 8, 16, 1):
-        layers += [nn.Conv2d(c, width, 3, padding=dil, dilation=dil), nn.GroupNorm(4, width), nn.ReLU()]
-        c = width
-    layers.append(nn.Conv2d(width, 1, 1))
-    return nn.Sequential(*layers)
+def _block(c_in: int, c_out: int) -> nn.Sequential:
+    return nn.Sequential(
+        nn.Conv2d(c_in, c_out, 3, padding=1), nn.GroupNorm(4, c_out), nn.ReLU(),
+        nn.Conv2d(c_out, c_out, 3, padding=1), nn.GroupNorm(4, c_out), nn.ReLU(),
+    )
+
+
+class UNet(nn.Module):
+    """A small U-Net at half resolution: input ``(n, C, 64, 64)`` average-pooled to 32 x 32,
+    three down-samplings to 4 x 4 (the whole object in view), logits upsampled to ``(n, 1, 64, 64)``."""
+
+    def __init__(self, c_in: int, width: int = 8) -> None:
+        super().__init__()
+        w = width
+        self.enc = nn.ModuleList([_block(c_in, w), _block(w, 2 * w), _block(2 * w, 3 * w), _block(3 * w, 4 * w)])
+        self.dec = nn.ModuleList([_block(7 * w, 3 * w), _block(5 * w, 2 * w), _block(3 * w, w)])
+        self.head = nn.Conv2d(w, 1, 1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        x = F.avg_pool2d(x, 2)  # (n, C, 32, 32)
+        skips = []
+        for i, enc in enumerate(self.enc):
+            x = enc(x if i == 0 else F.max_pool2d(x, 2))
+            skips.append(x)
+        for dec, skip in zip(self.dec, reversed(skips[:-1])):
+            x = dec(torch.cat([F.interpolate(x, scale_factor=2, mode="nearest"), skip], 1))
+        return F.interpolate(self.head(x), scale_factor=2, mode="bilinear", align_corners=False)  # (n, 1, 64, 64)
 
 
 def endpoint_error(seg: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
@@ -108,10 +150,11 @@ def plot(images, target, pred, fitted, path):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, default=300)
-    ap.add_argument("--train", type=int, default=128)
+    ap.add_argument("--steps", type=int, default=1200)
+    ap.add_argument("--train", type=int, default=512)
     ap.add_argument("--test", type=int, default=32)
-    ap.add_argument("--batch", type=int, default=8)
+    ap.add_argument("--batch", type=int, default=16)
+    ap.add_argument("--lr", type=float, default=1e-2, help="peak learning rate (one-cycle schedule)")
     ap.add_argument("--fit-steps", type=int, default=150)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "output", help="folder for axis_heatmap.png")
@@ -122,17 +165,20 @@ def main() -> None:
     torch.manual_seed(args.seed)  # the network's initial weights (nn layers draw from the global generator)
     x_tr, y_tr, _, _ = make_set(args.train, 1000)
     x_te, y_te, drawn_te, axes_te = make_set(args.test, 5000)
-    net = make_net()
-    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    net = UNet(x_tr.shape[1])
+    opt = torch.optim.Adam(net.parameters(), lr=args.lr)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, args.lr, total_steps=args.steps)
+    pos_weight = torch.tensor(10.0)  # about 4 % of the target is axis
     gen = torch.Generator().manual_seed(args.seed)
     for step in range(args.steps):
         idx = torch.randint(0, args.train, (args.batch,), generator=gen)
-        loss = binary_focal_loss_with_logits(net(x_tr[idx]), y_tr[idx], alpha=0.25, gamma=2.0, reduction="mean")
+        loss = F.binary_cross_entropy_with_logits(net(x_tr[idx]), y_tr[idx], pos_weight=pos_weight)
         opt.zero_grad()
         loss.backward()
         opt.step()
-        if step % 50 == 0 or step == args.steps - 1:
-            print(f"step {step:4d}  focal loss {loss.item():.4f}")
+        sched.step()
+        if step % 200 == 0 or step == args.steps - 1:
+            print(f"step {step:4d}  weighted BCE {loss.item():.4f}")
     with torch.no_grad():
         pred = torch.sigmoid(net(x_te))
     score = axis_pixel_f1(pred, drawn_te, max_dist=2)

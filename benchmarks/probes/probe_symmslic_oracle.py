@@ -19,7 +19,7 @@ told the mask's own best reflection axis, and masks built from it:
 * ``band``: the 4.3.1 mask (union of the mirror pairs; with a given axis, every pixel
   whose mirror lies in the image);
 * ``ncc >= t``: the pixels whose neighbourhood correlates with the mirror image's at least
-  ``t`` (:func:`torchsym.image.symmslic.mirror_correlation`, the region growth's
+  ``t`` (:func:`torchsym.image.symmslic.mirror_correlation_map`, the region growth's
   measure), made symmetric;
 * ``pairs, ncc >= t``: the union of the mirror pairs at least half of whose pixels have
   ``ncc >= t``;
@@ -58,7 +58,7 @@ import bench_segmentation as seg  # noqa: E402
 import bench_superpixels as sup  # noqa: E402
 
 from torchsym.image.boundary import boundary_curves  # noqa: E402
-from torchsym.image.symmslic import mirror_correlation, symm_slic  # noqa: E402
+from torchsym.image.symmslic import mirror_correlation_map, symm_slic  # noqa: E402
 from torchsym.image.symmslic.pairs import mirror_edge_matches  # noqa: E402
 from torchsym.image.symmslic.solver import LAB_SCALE  # noqa: E402
 from torchsym.io import read_image  # noqa: E402
@@ -165,7 +165,7 @@ def seg_part() -> list[dict]:
         n, off = seg.mask_axis(obj)
         r = symm_slic(img, params, known_axes=torch.tensor([[n[0], n[1], off]]))
         lab = (kornia.color.rgb_to_lab(img.reshape(-1, *img.shape[-3:])[:1].float())[0] * LAB_SCALE[:, None, None]).numpy()
-        ncc, band, (mx, my) = mirror_correlation(lab, np.asarray(n, dtype=np.float64), float(off))
+        ncc, band, (mx, my) = mirror_correlation_map(lab, np.asarray(n, dtype=np.float64), float(off))
         labels = r.labels.numpy()
         h, w = labels.shape
         ys, xs = np.mgrid[0:h, 0:w]

@@ -281,15 +281,15 @@ def test_mirror_correlation():
     """About the axis of a mirrored image every pixel correlates with its mirror (about 1);
     about another axis, and on a flat image, far less; the band is the pixels whose mirror
     lies in the image."""
-    from torchsym.image.symmslic import mirror_correlation
+    from torchsym.image.symmslic import mirror_correlation_map
 
     half = torch.nn.functional.interpolate(torch.rand(1, 3, 10, 5, generator=torch.Generator().manual_seed(1)), size=(80, 100), mode="bilinear")[0]
     lab = torch.cat([half, half.flip(-1)], -1).numpy() * 100  # (3, 80, 200)
-    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -99.5)
+    ncc, band, _ = mirror_correlation_map(lab, np.array([1.0, 0.0]), -99.5)
     assert band.all() and np.median(ncc) > 0.95
-    ncc, band, _ = mirror_correlation(lab, np.array([1.0, 0.0]), -49.5)
+    ncc, band, _ = mirror_correlation_map(lab, np.array([1.0, 0.0]), -49.5)
     assert 0.45 < band.mean() < 0.55 and np.median(ncc[band]) < 0.6
-    ncc, _, _ = mirror_correlation(np.full_like(lab, 50.0), np.array([1.0, 0.0]), -99.5)
+    ncc, _, _ = mirror_correlation_map(np.full_like(lab, 50.0), np.array([1.0, 0.0]), -99.5)
     assert np.abs(ncc).max() < 1e-6
 
 

@@ -20,7 +20,7 @@ import torch
 from torchsym.core.random import numpy_rng
 from torchsym.geometry.mesh import Mesh
 
-__all__ = ["CadModel", "box_mesh", "cad_chair", "cad_model"]
+__all__ = ["CadModel", "box_arrays", "cad_chair", "cad_model"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,7 +38,7 @@ class CadModel:
     offset: torch.Tensor
 
 
-def box_mesh(lo: np.ndarray, hi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+def box_arrays(lo: np.ndarray, hi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """A closed box from ``lo (3,)`` to ``hi (3,)``, each face an ``n x n`` grid of quads of
     two triangles: ``(vertices (6 (n + 1)^2, 3), faces (12 n^2, 3))``, outward winding."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
@@ -64,7 +64,7 @@ def _assemble(parts: list[tuple[np.ndarray, np.ndarray, int]], rot: np.ndarray, 
     ``x = 0`` goes with them."""
     verts, faces, count = [], [], 0
     for lo, hi, n in parts:
-        v, f = box_mesh(np.minimum(lo, hi), np.maximum(lo, hi), n)
+        v, f = box_arrays(np.minimum(lo, hi), np.maximum(lo, hi), n)
         faces.append(f + count)
         verts.append(v)
         count += len(v)

@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from torchsym.image.symmslic.pairs import MirrorPixelPairs
 
-__all__ = ["mirror_correlation", "symmetric_region"]
+__all__ = ["mirror_correlation_map", "symmetric_region"]
 
 
 def _blur(x: np.ndarray) -> np.ndarray:
@@ -21,7 +21,7 @@ def _blur(x: np.ndarray) -> np.ndarray:
     return out.reshape(x.shape[1], x.shape[2], -1).transpose(2, 0, 1)
 
 
-def mirror_correlation(lab: np.ndarray, normal: np.ndarray, offset: float) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+def mirror_correlation_map(lab: np.ndarray, normal: np.ndarray, offset: float) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """How well each pixel's neighbourhood (Gaussian, 4 px) matches the mirror image's
     about ``normal . (x, y) + offset = 0``: the normalised cross-correlation over the 3
     channels of ``lab (3, H, W)``, each variance with 4 added, so that a flat patch
@@ -47,7 +47,7 @@ def _grow(hull: np.ndarray, lab: np.ndarray, normal: np.ndarray, offset: float, 
     correlates with the mirror image's at least ``min_corr`` (normalised cross-correlation
     over the 3 channels of ``lab (3, H, W)``; a flat patch, variance under 4, correlates
     with nothing), keeping the pixels whose mirror lies in the image, then made symmetric."""
-    ncc, band, (mx, my) = mirror_correlation(lab, normal, offset)
+    ncc, band, (mx, my) = mirror_correlation_map(lab, normal, offset)
     agree = band & ((ncc >= min_corr) | hull)
     comp, _ = ndimage.label(agree)
     seeds = np.unique(comp[hull & agree])
