@@ -8,7 +8,7 @@ import torch
 import torchsym
 from torchsym.errors import ConfigError
 from torchsym.image.axes import AxisStageSettings
-from torchsym.image.axes.accepted import accepted_axes
+from torchsym.image.axes.accepted import accepted_axes, stage_axes_found
 from torchsym.image.symmetry_map.settings import SymmetryMapSettings
 from torchsym.image.symmslic.settings import SymmSlicSettings
 
@@ -31,6 +31,14 @@ class TestAcceptedAxes:
         b = accepted_axes(img[None], AxisStageSettings(), generator=torch.Generator().manual_seed(3))[0]
         assert torch.equal(a, b)
 
+    def test_symmslic_scores_0_about_an_axis_the_stage_did_not_accept(self):
+        noise = torch.rand(3, 160, 160, generator=torch.Generator().manual_seed(5))
+        lines, _, accepted = stage_axes_found(noise[None], AxisStageSettings())
+        res = torchsym.symm_slic(noise)
+        if not accepted and len(lines):
+            assert res.score == 0.0 and any("accepted no axis" in n for n in res.notes)
+        assert res.score < 0.3  # without symmetry, low either way
+
 
 class TestNestedGroup:
     @pytest.mark.parametrize("cls", [SymmSlicSettings, SymmetryMapSettings])
@@ -52,7 +60,11 @@ class TestNestedGroup:
             seen.append((settings, generator))
             return torch.zeros(0, 3), []
 
-        monkeypatch.setattr(mod, "accepted_axes", spy)
+        def spy_found(image, settings, *, generator=None):
+            return (*spy(image, settings, generator=generator), False)
+
+        name = "stage_axes_found" if hasattr(mod, "stage_axes_found") else "accepted_axes"
+        monkeypatch.setattr(mod, name, spy_found if name == "stage_axes_found" else spy)
         img, _ = single_objects[2]
         config = {"input": "image", "steps": [{"name": solver, "params": {"axes": {"decision": {"threshold": 0.42}}}}]}
         torchsym.detect(img, config)

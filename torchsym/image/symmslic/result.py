@@ -27,7 +27,9 @@ class SymmSlicResult(Result):
         mirror_right: ``(Q, 2)`` their mirror pixels (the set R).
         mask: ``(H, W)`` bool, the symmetric object: the union of the mirror superpixel
             pairs (unsupervised segmentation, Sec. 4.3.1).
-        score: share of the image covered by mirror superpixel pairs, in [0, 1].
+        score: share of the image covered by mirror superpixel pairs, in [0, 1]; 0 when the
+            pairs are about the axis stage's best-ranked axis that it did not accept (no
+            symmetry found).
         notes: what the caller should know (no edges, no axis: plain SLIC).
         timings: seconds per stage (``pairs``, ``init``, ``slic``, ``connectivity``, ``total``).
     """

@@ -31,7 +31,7 @@ import torch
 
 from torchsym.core.checks import as_tensor, check_image
 from torchsym.core.random import make_generator
-from torchsym.image.axes.accepted import accepted_axes
+from torchsym.image.axes.accepted import stage_axes_found
 from torchsym.core.registry import register_solver
 from torchsym.core.settings import Solver, resolve_settings
 from torchsym.errors import InputShapeError, InputValueError
@@ -172,10 +172,15 @@ def symm_slic(
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     rgb = img.expand(3, -1, -1) if img.shape[0] == 1 else img
+    axis_accepted = True  # the axes given, or accepted by the stage
     if known_axes is None and settings.axes_from == "stage":
-        known_axes = accepted_axes(rgb[None], settings.axes, generator=gen)[0].double().cpu()
+        lines, _, axis_accepted = stage_axes_found(rgb[None], settings.axes, generator=gen)
+        known_axes = lines.double().cpu()
         if known_axes.shape[0] == 0:
             notes.append("no axis found by the axis stage: plain SLIC superpixels")
+        elif not axis_accepted:
+            notes.append("the axis stage accepted no axis: the superpixels pair about its best-ranked axis, and the "
+                         "score is 0 (no symmetry found)")
     if known_axes is not None and len(known_axes) == 0:
         none = torch.zeros(0, 2, dtype=torch.float64)
         found = MirrorPixelPairs(none, none, torch.zeros(0, dtype=torch.int64), none, torch.zeros(0, dtype=torch.float64),
@@ -236,7 +241,7 @@ def symm_slic(
         mirror_left=found.left,
         mirror_right=found.right,
         mask=mask,
-        score=float(mask.double().mean()),
+        score=float(mask.double().mean()) if axis_accepted else 0.0,
         notes=notes,
         timings=timings,
     )
