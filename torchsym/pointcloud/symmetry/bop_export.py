@@ -2,13 +2,13 @@
 
     python -m torchsym.pointcloud.symmetry.bop_export path/to/models
 
-Each mesh (``obj_XXXXXX.ply``, or any ``.ply .obj .off .stl``; the object id is the
+Each mesh (``obj_000001.ply``, or any ``.ply .obj .off .stl``; the object id is the
 number in its name) is sampled on its surface, its whole symmetry group found
 (:func:`~torchsym.pointcloud.detect_symmetry`) and written as BOP's fields:
 ``diameter``, ``min_x/y/z``, ``size_x/y/z`` from the vertices, ``symmetries_discrete``
 (the proper rotations, 4 x 4 row-major in the model's units) and ``symmetries_continuous``
 (axes of revolution). The file is written atomically; a picture of each model's planes
-and axes, orders labelled, goes beside it (``models_info_pictures/obj_XXXXXX.png``).
+and axes, orders labelled, goes beside it (``models_info_pictures/obj_000001.png``).
 """
 
 from __future__ import annotations
